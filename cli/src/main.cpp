@@ -1,0 +1,61 @@
+// octolod: bake PLY meshes into on-disk LOD octrees, inspect, measure and replay them.
+#include <unistd.h>
+
+#include <cstdio>
+#include <iostream>
+
+#include "command.h"
+
+namespace octolod::cli {
+
+int report(const Status& status) {
+  std::fprintf(stderr, "error: %s\n", status.message().c_str());
+  return static_cast<int>(status.code());
+}
+
+void print_json(const nlohmann::json& document) { std::cout << document.dump(2) << '\n'; }
+
+Result<std::uint64_t> parse_byte_size(const std::string& text) {
+  std::size_t used = 0;
+  double value = 0;
+  try {
+    value = std::stod(text, &used);
+  } catch (const std::exception&) {
+    return usage_error("not a byte size: '" + text + "' (expected e.g. 64M, 512K, 2G)");
+  }
+  std::string suffix = text.substr(used);
+  double scale = 1;
+  if (suffix == "K" || suffix == "KiB" || suffix == "k") scale = 1024.0;
+  else if (suffix == "M" || suffix == "MiB" || suffix == "m") scale = 1024.0 * 1024.0;
+  else if (suffix == "G" || suffix == "GiB" || suffix == "g") scale = 1024.0 * 1024.0 * 1024.0;
+  else if (!suffix.empty() && suffix != "B")
+    return usage_error("unknown size suffix in '" + text + "' (use K, M or G)");
+  if (!(value >= 0) || value * scale > 1e18)
+    return usage_error("byte size out of range: '" + text + "'");
+  return static_cast<std::uint64_t>(value * scale);
+}
+
+}  // namespace octolod::cli
+
+int main(int argc, char** argv) {
+  using namespace octolod::cli;
+  CommandContext context;
+  CLI::App app{"octolod: bake meshes larger than memory into an on-disk LOD octree, "
+               "and stream it by view"};
+  app.set_version_flag("--version", std::string("octolod ") + OCTOLOD_VERSION);
+  app.require_subcommand(1);
+  app.fallthrough();
+  app.add_flag("--json", context.json, "Machine-readable output: one JSON document on stdout");
+  app.add_flag("--progress", context.progress,
+               "Human progress on stderr (default: only when stderr is a terminal)");
+
+
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    int code = app.exit(e);
+    return code == 0 ? 0 : static_cast<int>(octolod::ErrorCode::usage);
+  }
+  return context.exit_code;
+}

@@ -1,0 +1,85 @@
+// The manifest: manifest.json at the root of a baked tree. It describes the whole octree (node
+// directories, bounds, LODs with their triangle counts, errors, sizes and files) so a runtime can
+// plan everything before loading a single payload. JSON, versioned; see docs/formats.md.
+//
+// Octants: child i of a node covers the half-open sub-cube selected by bit 0 = upper x half,
+// bit 1 = upper y half, bit 2 = upper z half. Child directories are named "0".."7".
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <filesystem>
+#include <map>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "octolod/formats/bounds.h"
+#include "octolod/formats/status.h"
+#include "octolod/formats/vertex_layout.h"
+
+namespace octolod {
+
+inline constexpr std::uint32_t kManifestVersion = 1;
+inline constexpr std::string_view kManifestFileName = "manifest.json";
+
+struct LodInfo {
+  std::uint32_t triangles = 0;
+  std::uint32_t vertices = 0;
+  // Conservative geometric error in model units: an upper bound on the distance from any point
+  // of the original surface this node covers to this LOD. 0 for the original triangles.
+  double error = 0.0;
+  std::uint64_t bytes = 0;  // size of `file`
+  std::string file;         // node file, relative to the tree root, '/'-separated
+};
+
+struct NodeInfo {
+  std::string path;            // directory relative to the root, "" for the root, else "3/5"
+  std::uint32_t depth = 0;     // root = 0
+  std::int32_t parent = -1;    // index into Manifest::nodes, -1 for the root
+  std::array<std::int32_t, 8> children{-1, -1, -1, -1, -1, -1, -1, -1};  // by octant
+  Bounds cell;                 // the octree cube this node owns (centroid assignment)
+  Bounds bounds;               // tight bounds of its triangles (may stick out of `cell`)
+  std::uint64_t source_triangles = 0;  // original triangles in this subtree
+  std::vector<LodInfo> lods;   // finest first; a leaf's lods[0] is its original triangles
+
+  std::uint8_t child_mask() const {
+    std::uint8_t m = 0;
+    for (int i = 0; i < 8; ++i)
+      if (children[static_cast<std::size_t>(i)] >= 0) m = static_cast<std::uint8_t>(m | (1u << i));
+    return m;
+  }
+  bool is_leaf() const { return child_mask() == 0; }
+};
+
+struct BakeParameters {
+  std::string input;            // input file name as given
+  std::uint32_t max_tris = 0;
+  std::uint32_t max_depth = 0;
+  std::uint64_t memory_budget_bytes = 0;
+  std::uint32_t threads = 0;
+  std::string method;           // clustering method, "" when no LODs were built
+};
+
+struct Manifest {
+  std::uint32_t version = kManifestVersion;
+  VertexLayout layout;
+  Bounds bounds;                        // tight bounds of the model
+  std::uint64_t input_vertices = 0;
+  std::uint64_t input_triangles = 0;    // after fan triangulation, degenerate ones included
+  BakeParameters parameters;
+  std::map<std::string, double> stage_seconds;  // wall time per bake stage
+  std::map<std::string, double> stats;          // other numbers (peak RSS bytes, ...)
+  std::vector<NodeInfo> nodes;          // nodes[0] is the root; parents precede children
+};
+
+std::string manifest_to_json(const Manifest& manifest);
+// Parses and validates (indices in range, parent/child links consistent, depths, files
+// relative and without "..").
+Result<Manifest> manifest_from_json(std::string_view text, std::string_view name);
+
+// write_manifest writes atomically (temporary sibling + rename).
+Status write_manifest(const std::filesystem::path& path, const Manifest& manifest);
+Result<Manifest> read_manifest(const std::filesystem::path& path);
+
+}  // namespace octolod

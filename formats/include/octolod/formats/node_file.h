@@ -1,0 +1,53 @@
+// Node LOD files: one indexed mesh (one LOD of one octree node) in a compact, versioned,
+// checksummed binary file that loads with one read. Layout (little-endian), see docs/formats.md:
+//   header  48 bytes: magic "OCTOLOD\0", version u32, layout mask u32, vertex_count u32,
+//           index_count u32, index_bytes u32 (2 or 4), reserved u32, bounds min/max 6 x f32
+//   vertices  vertex_count * layout.floats() f32, interleaved (VertexLayout order)
+//   indices   index_count * index_bytes, 3 per triangle
+//   crc32     u32 (IEEE) over everything before it
+// Positions are stored exactly (float32), so vertices shared by neighbouring nodes stay
+// bit-identical and cuts stay crack-free.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <filesystem>
+#include <span>
+#include <string_view>
+#include <vector>
+
+#include "octolod/formats/bounds.h"
+#include "octolod/formats/status.h"
+#include "octolod/formats/vertex_layout.h"
+
+namespace octolod {
+
+// An indexed triangle mesh with interleaved vertices: the unit of work of the LOD stages and
+// the GPU-ready payload of the runtime.
+struct NodeMesh {
+  VertexLayout layout;
+  std::vector<float> vertices;          // vertex_count() * layout.floats()
+  std::vector<std::uint32_t> indices;   // 3 per triangle, each < vertex_count()
+
+  std::size_t vertex_count() const { return layout.floats() ? vertices.size() / layout.floats() : 0; }
+  std::size_t triangle_count() const { return indices.size() / 3; }
+  Bounds bounds() const;
+  friend bool operator==(const NodeMesh&, const NodeMesh&) = default;
+};
+
+inline constexpr std::uint32_t kNodeFileVersion = 1;
+inline constexpr std::size_t kNodeFileHeaderBytes = 48;
+
+// Serialized size of `mesh`, for budgeting before encoding.
+std::size_t node_file_size(const NodeMesh& mesh);
+std::vector<std::byte> encode_node_file(const NodeMesh& mesh);
+// `name` is used in error messages (usually the file path).
+Result<NodeMesh> decode_node_file(std::span<const std::byte> bytes, std::string_view name);
+
+Status write_node_file(const std::filesystem::path& path, const NodeMesh& mesh);
+Result<NodeMesh> read_node_file(const std::filesystem::path& path);
+
+// CRC-32 (IEEE 802.3, reflected, as zlib's crc32) of `bytes`, continuing from `crc`.
+std::uint32_t crc32(std::span<const std::byte> bytes, std::uint32_t crc = 0);
+
+}  // namespace octolod

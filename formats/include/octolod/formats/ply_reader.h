@@ -1,0 +1,86 @@
+// Streaming PLY reader (syntax + semantics): reads a PLY file in bounded portions and hands out
+// batches of vertices (in VertexLayout order) and triangles (polygons fan-triangulated), in the
+// order the elements appear in the file. Memory never depends on the file's size: the reader
+// holds at most PlyReadOptions::buffer_bytes of decoded data plus its file buffer.
+//
+// Accepted: format ascii | binary_little_endian | binary_big_endian 1.0; comments and obj_info;
+// any elements in any order; scalar types char/uchar/short/ushort/int/uint/float/double and
+// int8/uint8/int16/uint16/int32/uint32/float32/float64; list properties of any count/item type.
+// Kept vertex properties: x,y,z; nx,ny,nz; red,green,blue (alpha read and dropped) as uchar or
+// float; u,v | s,t | texture_u,texture_v | texture_s,texture_t. Faces: the list property
+// vertex_indices or vertex_index. Everything else is skipped.
+//
+// Errors (Status bad_input unless noted) name the file and the line (ascii) or byte offset
+// (binary): truncation, bad magic/format line, unknown types, counts the file cannot hold, face
+// lists with < 3 or > 2^20 entries, indices negative or >= vertex count, NaN/Inf coordinates,
+// a header over 1 MiB or without end_header, declared elements missing. Vertex counts >= 2^32
+// are `unsupported` (indices are 32-bit).
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <memory>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "octolod/formats/ply.h"
+#include "octolod/formats/status.h"
+#include "octolod/formats/vertex_layout.h"
+
+namespace octolod {
+
+struct PlyInfo {
+  std::filesystem::path path;
+  PlyFormat format = PlyFormat::ascii;
+  std::uint64_t vertex_count = 0;  // as declared in the header
+  std::uint64_t face_count = 0;    // polygons as declared (triangles after fan-out may be more)
+  VertexLayout layout;             // which attributes the file has (all three colour channels,
+                                   // all normal components, both uv components are required)
+  PlyColorType color_type = PlyColorType::uchar;  // on-disk colour type when layout.color
+  std::uint64_t header_bytes = 0;  // bytes up to and including the end_header line
+};
+
+struct PlyReadOptions {
+  // Upper bound on decoded data held per batch. Larger batches mean fewer calls; memory is
+  // this plus a fixed 64 KiB file buffer. Minimum 4 KiB.
+  std::size_t buffer_bytes = std::size_t{1} << 20;
+};
+
+struct PlyBatch {
+  enum class Kind { vertices, triangles, end };
+  Kind kind = Kind::end;
+  // Index of the first vertex / triangle of this batch within the file's stream of them.
+  std::uint64_t first = 0;
+  // kind == vertices: count * layout.floats() floats. Valid until the next call to next().
+  std::span<const float> vertices;
+  // kind == triangles: count * 3 vertex indices, each < info().vertex_count.
+  std::span<const std::uint32_t> triangles;
+};
+
+class PlyReader {
+ public:
+  // Opens the file and parses the header.
+  static Result<std::unique_ptr<PlyReader>> open(const std::filesystem::path& path,
+                                                 const PlyReadOptions& options = {});
+  virtual ~PlyReader() = default;
+
+  const PlyInfo& info() const { return info_; }
+
+  // The next batch in file order; Kind::end after the last element, then end forever.
+  // After an error the reader is unusable.
+  virtual Result<PlyBatch> next() = 0;
+
+ protected:
+  PlyInfo info_;
+};
+
+// Convenience for tests and small files: the whole mesh in memory.
+struct PlyMesh {
+  PlyInfo info;
+  std::vector<float> vertices;          // info.vertex_count * info.layout.floats()
+  std::vector<std::uint32_t> triangles;  // 3 per triangle
+};
+Result<PlyMesh> read_ply(const std::filesystem::path& path);
+
+}  // namespace octolod
