@@ -1,1 +1,206 @@
-// placeholder: being written this session
+// manifest.json reading/writing and validation; the schema is documented in docs/formats.md.
+#include "octolod/formats/manifest.h"
+
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <sstream>
+#include <unistd.h>
+
+#include <nlohmann/json.hpp>
+
+namespace octolod {
+namespace {
+
+using nlohmann::json;
+
+json bounds_to_json(const Bounds& b) { return json{{"min", b.min}, {"max", b.max}}; }
+
+Bounds bounds_from_json(const json& j) {
+  Bounds b;
+  b.min = j.at("min").get<std::array<float, 3>>();
+  b.max = j.at("max").get<std::array<float, 3>>();
+  return b;
+}
+
+json layout_to_json(const VertexLayout& layout) {
+  return json{{"normal", layout.normal}, {"color", layout.color}, {"uv", layout.uv},
+              {"floats_per_vertex", layout.floats()}};
+}
+
+Status invalid(std::string_view name, const std::string& what) {
+  return bad_input_error(std::string(name) + ": invalid manifest: " + what);
+}
+
+bool safe_relative(const std::string& p) {
+  if (p.empty() || p.front() == '/') return false;
+  std::size_t start = 0;
+  while (start <= p.size()) {
+    std::size_t end = p.find('/', start);
+    if (end == std::string::npos) end = p.size();
+    std::string part = p.substr(start, end - start);
+    if (part.empty() || part == "..") return false;
+    start = end + 1;
+  }
+  return true;
+}
+
+Status validate(const Manifest& m, std::string_view name) {
+  if (m.nodes.empty()) return invalid(name, "no nodes");
+  const auto count = static_cast<std::int64_t>(m.nodes.size());
+  for (std::size_t i = 0; i < m.nodes.size(); ++i) {
+    const NodeInfo& n = m.nodes[i];
+    const std::string where = "node " + std::to_string(i);
+    if (i == 0 ? n.parent != -1 : (n.parent < 0 || n.parent >= static_cast<std::int64_t>(i)))
+      return invalid(name, where + ": parent must precede the node (root has none)");
+    if (i > 0 && n.depth != m.nodes[static_cast<std::size_t>(n.parent)].depth + 1)
+      return invalid(name, where + ": depth is not parent depth + 1");
+    if (i == 0 && n.depth != 0) return invalid(name, "root depth must be 0");
+    for (std::size_t c = 0; c < 8; ++c) {
+      std::int32_t child = n.children[c];
+      if (child == -1) continue;
+      if (child <= static_cast<std::int64_t>(i) || child >= count)
+        return invalid(name, where + ": child index out of range");
+      if (m.nodes[static_cast<std::size_t>(child)].parent != static_cast<std::int32_t>(i))
+        return invalid(name, where + ": child " + std::to_string(child) + " names another parent");
+    }
+    if (i > 0) {
+      const NodeInfo& parent = m.nodes[static_cast<std::size_t>(n.parent)];
+      bool listed = false;
+      for (std::int32_t c : parent.children) listed = listed || c == static_cast<std::int32_t>(i);
+      if (!listed) return invalid(name, where + ": not listed among its parent's children");
+    }
+    for (std::size_t l = 0; l < n.lods.size(); ++l) {
+      const LodInfo& lod = n.lods[l];
+      if (!safe_relative(lod.file))
+        return invalid(name, where + " lod " + std::to_string(l) + ": file must be a relative path without '..'");
+      if (!(lod.error >= 0.0)) return invalid(name, where + " lod " + std::to_string(l) + ": negative or NaN error");
+    }
+  }
+  return {};
+}
+
+}  // namespace
+
+std::string manifest_to_json(const Manifest& m) {
+  json nodes = json::array();
+  for (const NodeInfo& n : m.nodes) {
+    json lods = json::array();
+    for (const LodInfo& l : n.lods)
+      lods.push_back({{"triangles", l.triangles}, {"vertices", l.vertices}, {"error", l.error},
+                      {"bytes", l.bytes}, {"file", l.file}});
+    nodes.push_back({{"path", n.path},
+                     {"depth", n.depth},
+                     {"parent", n.parent},
+                     {"children", n.children},
+                     {"child_mask", n.child_mask()},
+                     {"cell", bounds_to_json(n.cell)},
+                     {"bounds", bounds_to_json(n.bounds)},
+                     {"source_triangles", n.source_triangles},
+                     {"lods", lods}});
+  }
+  const BakeParameters& p = m.parameters;
+  json doc{{"format", "octolod-manifest"},
+           {"version", m.version},
+           {"layout", layout_to_json(m.layout)},
+           {"bounds", bounds_to_json(m.bounds)},
+           {"input_vertices", m.input_vertices},
+           {"input_triangles", m.input_triangles},
+           {"parameters",
+            {{"input", p.input},
+             {"max_tris", p.max_tris},
+             {"max_depth", p.max_depth},
+             {"memory_budget_bytes", p.memory_budget_bytes},
+             {"threads", p.threads},
+             {"method", p.method}}},
+           {"stage_seconds", m.stage_seconds},
+           {"stats", m.stats},
+           {"nodes", nodes}};
+  return doc.dump(1) + "\n";
+}
+
+Result<Manifest> manifest_from_json(std::string_view text, std::string_view name) {
+  json doc = json::parse(text.begin(), text.end(), nullptr, /*allow_exceptions=*/false);
+  if (doc.is_discarded()) return bad_input_error(std::string(name) + ": not valid JSON");
+  Manifest m;
+  try {
+    if (doc.at("format").get<std::string>() != "octolod-manifest")
+      return invalid(name, "\"format\" is not \"octolod-manifest\"");
+    m.version = doc.at("version").get<std::uint32_t>();
+    if (m.version != kManifestVersion)
+      return Status(ErrorCode::unsupported, std::string(name) + ": manifest version " +
+                                                std::to_string(m.version) + ", this build reads " +
+                                                std::to_string(kManifestVersion));
+    const json& layout = doc.at("layout");
+    m.layout = VertexLayout{layout.at("normal").get<bool>(), layout.at("color").get<bool>(),
+                            layout.at("uv").get<bool>()};
+    m.bounds = bounds_from_json(doc.at("bounds"));
+    m.input_vertices = doc.at("input_vertices").get<std::uint64_t>();
+    m.input_triangles = doc.at("input_triangles").get<std::uint64_t>();
+    const json& p = doc.at("parameters");
+    m.parameters = BakeParameters{p.at("input").get<std::string>(),
+                                  p.at("max_tris").get<std::uint32_t>(),
+                                  p.at("max_depth").get<std::uint32_t>(),
+                                  p.at("memory_budget_bytes").get<std::uint64_t>(),
+                                  p.at("threads").get<std::uint32_t>(),
+                                  p.at("method").get<std::string>()};
+    m.stage_seconds = doc.at("stage_seconds").get<std::map<std::string, double>>();
+    m.stats = doc.at("stats").get<std::map<std::string, double>>();
+    for (const json& jn : doc.at("nodes")) {
+      NodeInfo n;
+      n.path = jn.at("path").get<std::string>();
+      n.depth = jn.at("depth").get<std::uint32_t>();
+      n.parent = jn.at("parent").get<std::int32_t>();
+      n.children = jn.at("children").get<std::array<std::int32_t, 8>>();
+      n.cell = bounds_from_json(jn.at("cell"));
+      n.bounds = bounds_from_json(jn.at("bounds"));
+      n.source_triangles = jn.at("source_triangles").get<std::uint64_t>();
+      for (const json& jl : jn.at("lods"))
+        n.lods.push_back(LodInfo{jl.at("triangles").get<std::uint32_t>(),
+                                 jl.at("vertices").get<std::uint32_t>(), jl.at("error").get<double>(),
+                                 jl.at("bytes").get<std::uint64_t>(), jl.at("file").get<std::string>()});
+      m.nodes.push_back(std::move(n));
+    }
+  } catch (const json::exception& e) {
+    // nlohmann reports missing keys and type mismatches by exception; convert at this boundary.
+    return invalid(name, e.what());
+  }
+  OCTOLOD_RETURN_IF_ERROR(validate(m, name));
+  return m;
+}
+
+Status write_manifest(const std::filesystem::path& path, const Manifest& manifest) {
+  const std::string text = manifest_to_json(manifest);
+  std::filesystem::path tmp = path;
+  tmp += ".tmp-" + std::to_string(::getpid());
+  std::FILE* f = std::fopen(tmp.c_str(), "wb");
+  if (!f) return io_error(tmp.string() + ": cannot create: " + std::strerror(errno));
+  bool ok = std::fwrite(text.data(), 1, text.size(), f) == text.size();
+  int saved = errno;
+  ok = (std::fflush(f) == 0) && ok;
+  if (!ok) saved = errno;
+  ok = (std::fclose(f) == 0) && ok;
+  std::error_code ec;
+  if (!ok) {
+    std::filesystem::remove(tmp, ec);
+    return io_error(path.string() + ": write failed: " + std::strerror(saved));
+  }
+  std::filesystem::rename(tmp, path, ec);
+  if (ec) {
+    std::filesystem::remove(tmp, ec);
+    return io_error(path.string() + ": rename failed: " + ec.message());
+  }
+  return {};
+}
+
+Result<Manifest> read_manifest(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return io_error(path.string() + ": cannot open: " + std::strerror(errno));
+  std::ostringstream text;
+  text << in.rdbuf();
+  if (in.bad()) return io_error(path.string() + ": read failed");
+  return manifest_from_json(text.str(), path.string());
+}
+
+}  // namespace octolod

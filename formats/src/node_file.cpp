@@ -1,1 +1,169 @@
-// placeholder: being written this session
+// Node LOD file encoding/decoding; the layout is documented in node_file.h and docs/formats.md.
+#include "octolod/formats/node_file.h"
+
+#include <array>
+#include <cassert>
+#include <cerrno>
+#include <cstring>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <string>
+
+#include "byte_io.h"
+
+namespace octolod {
+namespace {
+
+constexpr std::array<char, 8> kMagic{'O', 'C', 'T', 'O', 'L', 'O', 'D', '\0'};
+constexpr std::size_t kCrcBytes = 4;
+
+std::uint32_t index_bytes_for(std::size_t vertex_count) { return vertex_count <= 0xFFFFu ? 2u : 4u; }
+
+const std::array<std::uint32_t, 256>& crc_table() {
+  static const std::array<std::uint32_t, 256> table = [] {
+    std::array<std::uint32_t, 256> t{};
+    for (std::uint32_t i = 0; i < 256; ++i) {
+      std::uint32_t c = i;
+      for (int k = 0; k < 8; ++k) c = (c & 1u) ? 0xEDB88320u ^ (c >> 1) : c >> 1;
+      t[i] = c;
+    }
+    return t;
+  }();
+  return table;
+}
+
+Status corrupt(std::string_view name, std::size_t offset, const std::string& what) {
+  return bad_input_error(std::string(name) + ": byte offset " + std::to_string(offset) + ": " + what);
+}
+
+}  // namespace
+
+std::uint32_t crc32(std::span<const std::byte> bytes, std::uint32_t crc) {
+  const auto& table = crc_table();
+  crc = ~crc;
+  for (std::byte b : bytes) crc = table[(crc ^ static_cast<std::uint32_t>(b)) & 0xFFu] ^ (crc >> 8);
+  return ~crc;
+}
+
+Bounds NodeMesh::bounds() const {
+  Bounds b;
+  const std::size_t stride = layout.floats();
+  for (std::size_t i = 0; i + stride <= vertices.size(); i += stride) b.extend(&vertices[i]);
+  return b;
+}
+
+std::size_t node_file_size(const NodeMesh& mesh) {
+  return kNodeFileHeaderBytes + mesh.vertices.size() * sizeof(float) +
+         mesh.indices.size() * index_bytes_for(mesh.vertex_count()) + kCrcBytes;
+}
+
+std::vector<std::byte> encode_node_file(const NodeMesh& mesh) {
+  assert(mesh.vertices.size() % mesh.layout.floats() == 0 && "NodeMesh: partial vertex");
+  assert(mesh.indices.size() % 3 == 0 && "NodeMesh: partial triangle");
+  const std::uint32_t index_bytes = index_bytes_for(mesh.vertex_count());
+  std::vector<std::byte> out;
+  out.reserve(node_file_size(mesh));
+  for (char c : kMagic) out.push_back(static_cast<std::byte>(c));
+  detail::append_le(out, kNodeFileVersion);
+  detail::append_le(out, mesh.layout.mask());
+  detail::append_le(out, static_cast<std::uint32_t>(mesh.vertex_count()));
+  detail::append_le(out, static_cast<std::uint32_t>(mesh.indices.size()));
+  detail::append_le(out, index_bytes);
+  detail::append_le(out, std::uint32_t{0});
+  Bounds b = mesh.vertex_count() ? mesh.bounds() : Bounds{{0, 0, 0}, {0, 0, 0}};
+  for (float v : b.min) detail::append_le(out, v);
+  for (float v : b.max) detail::append_le(out, v);
+  const auto* vbytes = reinterpret_cast<const std::byte*>(mesh.vertices.data());
+  out.insert(out.end(), vbytes, vbytes + mesh.vertices.size() * sizeof(float));
+  for (std::uint32_t i : mesh.indices) {
+    assert(i < mesh.vertex_count() && "NodeMesh: index out of range");
+    if (index_bytes == 2) detail::append_le(out, static_cast<std::uint16_t>(i));
+    else detail::append_le(out, i);
+  }
+  detail::append_le(out, crc32(out));
+  return out;
+}
+
+Result<NodeMesh> decode_node_file(std::span<const std::byte> bytes, std::string_view name) {
+  if (bytes.size() < kNodeFileHeaderBytes + kCrcBytes)
+    return corrupt(name, bytes.size(), "truncated node file (" + std::to_string(bytes.size()) +
+                                           " bytes, header needs " +
+                                           std::to_string(kNodeFileHeaderBytes + kCrcBytes) + ")");
+  for (std::size_t i = 0; i < kMagic.size(); ++i)
+    if (bytes[i] != static_cast<std::byte>(kMagic[i])) return corrupt(name, i, "not an octolod node file (bad magic)");
+  const auto version = detail::load_le<std::uint32_t>(bytes, 8);
+  if (version != kNodeFileVersion)
+    return Status(ErrorCode::unsupported, std::string(name) + ": byte offset 8: node file version " +
+                                              std::to_string(version) + ", this build reads " +
+                                              std::to_string(kNodeFileVersion));
+  const auto mask = detail::load_le<std::uint32_t>(bytes, 12);
+  if ((mask & ~VertexLayout::kValidMask) != 0) return corrupt(name, 12, "unknown attribute bits in layout mask");
+  const auto vertex_count = detail::load_le<std::uint32_t>(bytes, 16);
+  const auto index_count = detail::load_le<std::uint32_t>(bytes, 20);
+  const auto index_bytes = detail::load_le<std::uint32_t>(bytes, 24);
+  if (index_count % 3 != 0) return corrupt(name, 20, "index count not a multiple of 3");
+  if (index_bytes != index_bytes_for(vertex_count))
+    return corrupt(name, 24, "index size " + std::to_string(index_bytes) + " does not match vertex count");
+  NodeMesh mesh;
+  mesh.layout = VertexLayout::from_mask(mask);
+  // Sizes in 64-bit arithmetic: the counts are untrusted until they match the byte length.
+  const std::uint64_t vertex_floats = std::uint64_t{vertex_count} * mesh.layout.floats();
+  const std::uint64_t expected = kNodeFileHeaderBytes + vertex_floats * 4 +
+                                 std::uint64_t{index_count} * index_bytes + kCrcBytes;
+  if (expected != bytes.size())
+    return corrupt(name, bytes.size() < expected ? bytes.size() : expected,
+                   "size mismatch: header describes " + std::to_string(expected) + " bytes, file has " +
+                       std::to_string(bytes.size()));
+  const std::size_t crc_offset = bytes.size() - kCrcBytes;
+  if (crc32(bytes.first(crc_offset)) != detail::load_le<std::uint32_t>(bytes, crc_offset))
+    return corrupt(name, crc_offset, "checksum mismatch (file corrupted)");
+  mesh.vertices.resize(static_cast<std::size_t>(vertex_floats));
+  std::memcpy(mesh.vertices.data(), bytes.data() + kNodeFileHeaderBytes, mesh.vertices.size() * 4);
+  for (std::size_t i = 0; i < mesh.vertices.size(); ++i)
+    if (!std::isfinite(mesh.vertices[i]))
+      return corrupt(name, kNodeFileHeaderBytes + i * 4, "non-finite vertex value");
+  mesh.indices.resize(index_count);
+  const std::size_t index_offset = kNodeFileHeaderBytes + mesh.vertices.size() * 4;
+  for (std::size_t i = 0; i < index_count; ++i) {
+    const std::size_t at = index_offset + i * index_bytes;
+    std::uint32_t v = index_bytes == 2 ? detail::load_le<std::uint16_t>(bytes, at)
+                                       : detail::load_le<std::uint32_t>(bytes, at);
+    if (v >= vertex_count)
+      return corrupt(name, at, "index " + std::to_string(v) + " >= vertex count " + std::to_string(vertex_count));
+    mesh.indices[i] = v;
+  }
+  return mesh;
+}
+
+Status write_node_file(const std::filesystem::path& path, const NodeMesh& mesh) {
+  std::vector<std::byte> bytes = encode_node_file(mesh);
+  std::FILE* f = std::fopen(path.c_str(), "wb");
+  if (!f) return io_error(path.string() + ": cannot create: " + std::strerror(errno));
+  std::size_t written = std::fwrite(bytes.data(), 1, bytes.size(), f);
+  int write_errno = errno;
+  bool flushed = std::fflush(f) == 0;
+  if (!flushed) write_errno = errno;
+  bool closed = std::fclose(f) == 0;
+  if (written != bytes.size() || !flushed || !closed) {
+    std::error_code ignored;
+    std::filesystem::remove(path, ignored);
+    return io_error(path.string() + ": write failed: " + std::strerror(write_errno));
+  }
+  return {};
+}
+
+Result<NodeMesh> read_node_file(const std::filesystem::path& path) {
+  std::FILE* f = std::fopen(path.c_str(), "rb");
+  if (!f) return io_error(path.string() + ": cannot open: " + std::strerror(errno));
+  std::vector<std::byte> bytes;
+  std::array<std::byte, 1 << 16> chunk;
+  std::size_t n;
+  while ((n = std::fread(chunk.data(), 1, chunk.size(), f)) > 0) bytes.insert(bytes.end(), chunk.begin(), chunk.begin() + static_cast<std::ptrdiff_t>(n));
+  bool failed = std::ferror(f) != 0;
+  std::fclose(f);
+  if (failed) return io_error(path.string() + ": read failed");
+  return decode_node_file(bytes, path.string());
+}
+
+}  // namespace octolod

@@ -1,6 +1,6 @@
 // Node LOD files: one indexed mesh (one LOD of one octree node) in a compact, versioned,
 // checksummed binary file that loads with one read. Layout (little-endian), see docs/formats.md:
-//   header  48 bytes: magic "OCTOLOD\0", version u32, layout mask u32, vertex_count u32,
+//   header  56 bytes: magic "OCTOLOD\0", version u32, layout mask u32, vertex_count u32,
 //           index_count u32, index_bytes u32 (2 or 4), reserved u32, bounds min/max 6 x f32
 //   vertices  vertex_count * layout.floats() f32, interleaved (VertexLayout order)
 //   indices   index_count * index_bytes, 3 per triangle
@@ -36,7 +36,7 @@ struct NodeMesh {
 };
 
 inline constexpr std::uint32_t kNodeFileVersion = 1;
-inline constexpr std::size_t kNodeFileHeaderBytes = 48;
+inline constexpr std::size_t kNodeFileHeaderBytes = 56;
 
 // Serialized size of `mesh`, for budgeting before encoding.
 std::size_t node_file_size(const NodeMesh& mesh);

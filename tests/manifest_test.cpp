@@ -1,0 +1,95 @@
+#include <gtest/gtest.h>
+
+#include "octolod/formats/manifest.h"
+
+namespace octolod {
+namespace {
+
+// Root with two children (octants 0 and 5); child 5 has one LOD.
+Manifest small_manifest() {
+  Manifest m;
+  m.layout = {true, false, true};
+  m.bounds = {{0, 0, 0}, {2, 2, 2}};
+  m.input_vertices = 10;
+  m.input_triangles = 12;
+  m.parameters = {"in.ply", 2000, 10, 64u << 20, 2, "grid"};
+  m.stage_seconds["sort"] = 0.5;
+  m.stats["peak_rss_bytes"] = 1e6;
+  NodeInfo root;
+  root.cell = {{0, 0, 0}, {2, 2, 2}};
+  root.bounds = root.cell;
+  root.children[0] = 1;
+  root.children[5] = 2;
+  root.source_triangles = 12;
+  root.lods.push_back({4, 4, 0.25, 100, "lod0.olod"});
+  NodeInfo a;
+  a.path = "0";
+  a.depth = 1;
+  a.parent = 0;
+  a.lods.push_back({6, 5, 0.0, 200, "0/lod0.olod"});
+  NodeInfo b = a;
+  b.path = "5";
+  b.lods[0].file = "5/lod0.olod";
+  m.nodes = {root, a, b};
+  return m;
+}
+
+TEST(Manifest, JsonRoundTripKeepsEveryField) {
+  Manifest m = small_manifest();
+  Result<Manifest> back = manifest_from_json(manifest_to_json(m), "m.json");
+  ASSERT_TRUE(back.ok()) << back.status().message();
+  EXPECT_EQ(manifest_to_json(back.value()), manifest_to_json(m));
+  EXPECT_EQ(back->nodes[0].child_mask(), 0b100001);
+  EXPECT_EQ(back->layout, m.layout);
+  EXPECT_DOUBLE_EQ(back->nodes[0].lods[0].error, 0.25);
+}
+
+TEST(Manifest, RejectsChildNamingAnotherParent) {
+  Manifest m = small_manifest();
+  m.nodes[2].parent = 1;
+  m.nodes[2].depth = 2;
+  Result<Manifest> r = manifest_from_json(manifest_to_json(m), "m.json");
+  ASSERT_FALSE(r.ok());
+  EXPECT_NE(r.status().message().find("m.json: invalid manifest"), std::string::npos);
+}
+
+TEST(Manifest, RejectsFilesEscapingTheTree) {
+  for (const char* file : {"../x.olod", "/etc/passwd", "a//b", ""}) {
+    Manifest m = small_manifest();
+    m.nodes[1].lods[0].file = file;
+    EXPECT_FALSE(manifest_from_json(manifest_to_json(m), "m.json").ok()) << file;
+  }
+}
+
+TEST(Manifest, RejectsMissingKeysWrongTypesAndGarbage) {
+  EXPECT_FALSE(manifest_from_json("{", "a").ok());
+  EXPECT_FALSE(manifest_from_json("{\"format\":\"octolod-manifest\"}", "b").ok());
+  std::string text = manifest_to_json(small_manifest());
+  std::string wrong_type = text;
+  wrong_type.replace(wrong_type.find("\"max_tris\": 2000"), 16, "\"max_tris\": \"x\"");
+  Result<Manifest> r = manifest_from_json(wrong_type, "c");
+  ASSERT_FALSE(r.ok());
+  EXPECT_EQ(r.status().code(), ErrorCode::bad_input);
+}
+
+TEST(Manifest, NewerVersionIsUnsupported) {
+  std::string text = manifest_to_json(small_manifest());
+  text.replace(text.find("\"version\": 1"), 12, "\"version\": 7");
+  Result<Manifest> r = manifest_from_json(text, "v7");
+  ASSERT_FALSE(r.ok());
+  EXPECT_EQ(r.status().code(), ErrorCode::unsupported);
+}
+
+TEST(Manifest, WriteIsAtomicAndReadable) {
+  auto path = std::filesystem::path(::testing::TempDir()) / "manifest_test.json";
+  ASSERT_TRUE(write_manifest(path, small_manifest()).ok());
+  Result<Manifest> back = read_manifest(path);
+  ASSERT_TRUE(back.ok());
+  EXPECT_EQ(back->nodes.size(), 3u);
+  for (const auto& entry : std::filesystem::directory_iterator(path.parent_path()))
+    EXPECT_EQ(entry.path().string().find("manifest_test.json.tmp"), std::string::npos);
+  std::filesystem::remove(path);
+}
+
+}  // namespace
+}  // namespace octolod
