@@ -1,0 +1,35 @@
+// Renders node meshes into an Image with real OpenGL on Mesa's OSMesa (llvmpipe): works on
+// CPU-only machines and in CI, no display needed. Shaded with a headlight; every mesh is tinted
+// by its own colour so a picture shows which node LODs a cut is made of.
+#pragma once
+
+#include <glm/glm.hpp>
+
+#include <span>
+
+#include "image.h"
+#include "octolod/formats/node_file.h"
+#include "octolod/formats/status.h"
+
+namespace octolod::cli {
+
+struct RenderItem {
+  const NodeMesh* mesh = nullptr;  // positions in model units; must outlive the call
+  glm::vec3 tint{1.0f};            // linear RGB 0..1, mixed half-and-half with the surface colour
+};
+
+struct RenderView {
+  glm::mat4 view{1.0f};        // model -> eye
+  glm::mat4 projection{1.0f};  // eye -> clip (OpenGL conventions)
+  int width = 1024;            // pixels
+  int height = 768;
+  std::uint32_t background = 0x20242c;  // 0xRRGGBB
+};
+
+// Returns io_error-class `unsupported` if no OpenGL context can be created.
+Result<Image> render_offscreen(std::span<const RenderItem> items, const RenderView& view);
+
+// A distinct tint per LOD level (0 = finest): green, yellow, orange, red, purple, blue, ...
+glm::vec3 lod_tint(std::size_t level);
+
+}  // namespace octolod::cli

@@ -1,0 +1,69 @@
+#include <gtest/gtest.h>
+
+#include <glm/gtc/matrix_transform.hpp>
+
+#include "image.h"
+#include "offscreen_renderer.h"
+
+namespace octolod::cli {
+namespace {
+
+// One quad facing +z, spanning [-1,1]^2 at z = 0.
+NodeMesh unit_quad() {
+  NodeMesh mesh;
+  mesh.vertices = {-1, -1, 0, 1, -1, 0, -1, 1, 0, 1, 1, 0};
+  mesh.indices = {0, 1, 2, 2, 1, 3};
+  return mesh;
+}
+
+RenderView looking_down_z(int w, int h) {
+  RenderView view;
+  view.width = w;
+  view.height = h;
+  view.view = glm::lookAt(glm::vec3(0, 0, 4), glm::vec3(0), glm::vec3(0, 1, 0));
+  view.projection = glm::perspective(glm::radians(45.0f), float(w) / float(h), 0.1f, 100.0f);
+  return view;
+}
+
+TEST(OffscreenRenderer, DrawsTheMeshTintedInTheMiddleAndBackgroundAtTheCorners) {
+  NodeMesh quad = unit_quad();
+  RenderItem item{&quad, lod_tint(3)};  // red-ish tint
+  RenderView view = looking_down_z(64, 48);
+  Result<Image> image = render_offscreen(std::span(&item, 1), view);
+  ASSERT_TRUE(image.ok()) << image.status().message();
+  EXPECT_EQ(image->get(0, 0), view.background);
+  std::uint32_t centre = image->get(32, 24);
+  EXPECT_NE(centre, view.background);
+  EXPECT_GT((centre >> 16) & 0xFF, centre & 0xFF) << "tint should make red dominate blue";
+}
+
+TEST(OffscreenRenderer, KeepsTheTopRowOnTop) {
+  // A quad covering only the upper half of the view must colour the image's top rows.
+  NodeMesh quad = unit_quad();
+  for (std::size_t i = 1; i < quad.vertices.size(); i += 3) quad.vertices[i] = quad.vertices[i] * 0.5f + 1.0f;
+  RenderItem item{&quad, glm::vec3(1)};
+  RenderView view = looking_down_z(64, 64);
+  Result<Image> image = render_offscreen(std::span(&item, 1), view);
+  ASSERT_TRUE(image.ok());
+  EXPECT_NE(image->get(32, 20), view.background);
+  EXPECT_EQ(image->get(32, 50), view.background);
+}
+
+TEST(Png, WritesAFileThatStartsWithThePngSignature) {
+  Image image(8, 4, 0x112233);
+  auto path = std::filesystem::path(::testing::TempDir()) / "pictures_test.png";
+  ASSERT_TRUE(write_png(path, image).ok());
+  std::FILE* f = std::fopen(path.c_str(), "rb");
+  ASSERT_NE(f, nullptr);
+  unsigned char sig[8] = {};
+  ASSERT_EQ(std::fread(sig, 1, 8, f), 8u);
+  std::fclose(f);
+  EXPECT_EQ(sig[1], 'P');
+  EXPECT_EQ(sig[2], 'N');
+  EXPECT_EQ(sig[3], 'G');
+  std::filesystem::remove(path);
+  EXPECT_EQ(write_png("/nonexistent-dir/x.png", image).code(), ErrorCode::io);
+}
+
+}  // namespace
+}  // namespace octolod::cli
