@@ -3,6 +3,7 @@
 #include <glm/gtc/matrix_transform.hpp>
 
 #include "image.h"
+#include "line_chart.h"
 #include "offscreen_renderer.h"
 
 namespace octolod::cli {
@@ -63,6 +64,37 @@ TEST(Png, WritesAFileThatStartsWithThePngSignature) {
   EXPECT_EQ(sig[3], 'G');
   std::filesystem::remove(path);
   EXPECT_EQ(write_png("/nonexistent-dir/x.png", image).code(), ErrorCode::io);
+}
+
+}  // namespace
+}  // namespace octolod::cli
+
+namespace octolod::cli {
+namespace {
+
+TEST(LineChart, DrawsOnePanelPerSeriesWithTheLineInItsColour) {
+  ChartSeries rising{"RESIDENT BYTES", {0, 1, 2, 3, 4}, 0x0000ff, 5};
+  ChartSeries flat{"MISSES", {1, 1, 1}, 0x00ff00, -1};
+  Image chart = draw_line_charts({rising, flat}, 200, 60);
+  EXPECT_EQ(chart.width, 200);
+  EXPECT_EQ(chart.height, 2 * (60 + 22 + 10) + 10);
+  int blue = 0, green = 0;
+  for (int y = 0; y < chart.height; ++y)
+    for (int x = 0; x < chart.width; ++x) {
+      blue += chart.get(x, y) == 0x0000ff;
+      green += chart.get(x, y) == 0x00ff00;
+    }
+  EXPECT_GT(blue, 100);
+  EXPECT_GT(green, 100);
+}
+
+TEST(LineChart, TextUsesTheFontAndSkipsUnknownCharacters) {
+  Image image(40, 10, 0xffffff);
+  draw_text(image, 0, 0, "1~", 0x000000);
+  int ink = 0;
+  for (int y = 0; y < 10; ++y)
+    for (int x = 0; x < 40; ++x) ink += image.get(x, y) == 0;
+  EXPECT_EQ(ink, 10);  // the glyph '1' has 10 lit pixels; '~' draws nothing
 }
 
 }  // namespace
