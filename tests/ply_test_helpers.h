@@ -1,0 +1,152 @@
+// Fixtures for the PLY tests: a scratch directory, byte-exact file writing, procedural meshes
+// for every vertex layout, and assertions on error statuses.
+#pragma once
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <bit>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <initializer_list>
+#include <limits>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "octolod/formats/ply_reader.h"
+#include "octolod/formats/ply_writer.h"
+#include "octolod/formats/status.h"
+#include "octolod/formats/vertex_layout.h"
+
+namespace octolod::test {
+
+// A fresh directory per test, removed afterwards.
+class ScratchDir {
+ public:
+  ScratchDir() {
+    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    std::string name = "octolod-ply-" + std::to_string(::getpid()) + "-";
+    if (info != nullptr) name += std::string(info->test_suite_name()) + "-" + info->name();
+    for (char& c : name)
+      if (c == '/') c = '_';
+    path_ = std::filesystem::temp_directory_path() / name;
+    std::filesystem::remove_all(path_);
+    std::filesystem::create_directories(path_);
+  }
+  ~ScratchDir() {
+    std::error_code ec;
+    std::filesystem::remove_all(path_, ec);
+  }
+  ScratchDir(const ScratchDir&) = delete;
+  ScratchDir& operator=(const ScratchDir&) = delete;
+
+  std::filesystem::path file(const std::string& name) const { return path_ / name; }
+  const std::filesystem::path& path() const { return path_; }
+
+ private:
+  std::filesystem::path path_;
+};
+
+inline void write_bytes(const std::filesystem::path& path, std::string_view bytes) {
+  std::ofstream out(path, std::ios::binary | std::ios::trunc);
+  out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+  ASSERT_TRUE(out.good()) << path;
+}
+
+inline std::string read_bytes(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+}
+
+// Little/big-endian byte builders for hand-made binary bodies.
+template <class T>
+void append_scalar(std::string& out, T value, bool big_endian) {
+  char bytes[sizeof(T)];
+  std::memcpy(bytes, &value, sizeof(T));
+  const bool swap = big_endian == (std::endian::native == std::endian::little);
+  if (swap)
+    for (std::size_t i = 0; i < sizeof(T) / 2; ++i) std::swap(bytes[i], bytes[sizeof(T) - 1 - i]);
+  out.append(bytes, sizeof(T));
+}
+
+// The float the reader produces for an 8-bit colour channel value k.
+inline float byte_color(int k) { return static_cast<float>(k / 255.0); }
+
+struct TestMesh {
+  VertexLayout layout;
+  std::vector<float> vertices;
+  std::vector<std::uint32_t> triangles;
+  std::uint32_t vertex_count() const {
+    return static_cast<std::uint32_t>(vertices.size() / layout.floats());
+  }
+};
+
+// A strip of `n` vertices (n >= 3) and n-2 triangles whose values stress exact float text
+// round trips: tiny, huge, subnormal, negative zero, non-terminating decimals. Colours are
+// byte values k/255 when `byte_colors` (what a uchar file can hold), arbitrary otherwise.
+inline TestMesh strip_mesh(VertexLayout layout, bool byte_colors, std::uint32_t n = 7) {
+  static constexpr float kSpecial[] = {0.1f, -0.0f, 1e-30f, 1e-40f, 3.0e38f, -2.5f,
+                                       3.14159265f, 1.0f / 3.0f, 16777216.0f, -7e-12f};
+  TestMesh mesh;
+  mesh.layout = layout;
+  for (std::uint32_t i = 0; i < n; ++i) {
+    auto special = [&](std::uint32_t k) { return kSpecial[(i * 3 + k) % std::size(kSpecial)]; };
+    for (std::uint32_t k = 0; k < 3; ++k)
+      mesh.vertices.push_back(special(k) + static_cast<float>(i));
+    if (layout.normal) {
+      const float a = 0.37f * static_cast<float>(i);
+      mesh.vertices.insert(mesh.vertices.end(), {std::cos(a), std::sin(a), 0.0f});
+    }
+    if (layout.color)
+      for (std::uint32_t k = 0; k < 3; ++k)
+        mesh.vertices.push_back(byte_colors ? byte_color(static_cast<int>((i * 53 + k * 101) % 256))
+                                            : special(k + 1) / 3e38f + 0.3f);
+    if (layout.uv) mesh.vertices.insert(mesh.vertices.end(), {special(2) * 0.5f, -special(1)});
+  }
+  for (std::uint32_t i = 0; i + 2 < n; ++i) {
+    if (i % 2 == 0)
+      mesh.triangles.insert(mesh.triangles.end(), {i, i + 1, i + 2});
+    else
+      mesh.triangles.insert(mesh.triangles.end(), {i + 1, i, i + 2});
+  }
+  return mesh;
+}
+
+// Bit-exact float comparison (so -0.0 != 0.0 and NaN patterns matter).
+inline ::testing::AssertionResult same_bits(const std::vector<float>& expected,
+                                            const std::vector<float>& actual) {
+  if (expected.size() != actual.size())
+    return ::testing::AssertionFailure()
+           << "sizes differ: " << expected.size() << " vs " << actual.size();
+  for (std::size_t i = 0; i < expected.size(); ++i)
+    if (std::bit_cast<std::uint32_t>(expected[i]) != std::bit_cast<std::uint32_t>(actual[i]))
+      return ::testing::AssertionFailure() << "float " << i << " differs: " << expected[i]
+                                           << " vs " << actual[i];
+  return ::testing::AssertionSuccess();
+}
+
+// The status is `code` and its message contains every one of `parts`.
+inline ::testing::AssertionResult is_error(const Status& status, ErrorCode code,
+                                           std::initializer_list<std::string_view> parts) {
+  if (status.ok()) return ::testing::AssertionFailure() << "expected an error, got ok";
+  if (status.code() != code)
+    return ::testing::AssertionFailure() << "code " << static_cast<int>(status.code())
+                                         << " instead of " << static_cast<int>(code) << ": "
+                                         << status.message();
+  for (std::string_view part : parts)
+    if (status.message().find(part) == std::string::npos)
+      return ::testing::AssertionFailure()
+             << "message lacks '" << part << "': " << status.message();
+  return ::testing::AssertionSuccess();
+}
+
+template <class T>
+Status status_of(const Result<T>& result) {
+  return result.ok() ? Status{} : result.status();
+}
+
+}  // namespace octolod::test
