@@ -255,6 +255,20 @@ TEST(PlyReader, SkipsUnknownElementsAndPropertiesIncludingLists) {
   }
 }
 
+TEST(PlyReader, ElementsWithoutPropertiesTakeNoSpace) {
+  ScratchDir dir;
+  for (PlyFormat format : kFormats) {
+    SCOPED_TRACE(std::string(to_string(format)));
+    std::string text = "ply\nformat " + std::string(to_string(format)) +
+                       " 1.0\nelement marker 1000000\nelement vertex 1\nproperty uchar x\n"
+                       "property uchar y\nproperty uchar z\nelement empty 5\nend_header\n";
+    text += format == PlyFormat::ascii ? "1 2 3\n" : "\x01\x02\x03";
+    const auto path = dir.file("empty_elements.ply");
+    write_bytes(path, text);
+    EXPECT_EQ(read_ok(path).vertices, (std::vector<float>{1, 2, 3}));
+  }
+}
+
 TEST(PlyReader, VertexIndexAndTextureAliases) {
   ScratchDir dir;
   struct Alias {

@@ -294,6 +294,10 @@ class StreamReader final : public PlyReader {
   }
 
   Status skip_element(const ElementPlan& element) {
+    if (element.properties.empty()) {  // entries without values take no bytes, nor lines
+      index_ = element.count;
+      return {};
+    }
     if constexpr (Source::kBinary) {
       if (element.fixed_size) {
         OCTOLOD_RETURN_IF_ERROR(
@@ -325,7 +329,9 @@ class StreamReader final : public PlyReader {
 
   Status decode_vertices(const ElementPlan& element, std::size_t& produced) {
     const std::size_t floats = info_.layout.floats();
-    const std::size_t room = std::max<std::size_t>(1, batch_bytes_ / (floats * sizeof(float)));
+    // Small files get small buffers: the count was checked against the file size.
+    const std::size_t room = static_cast<std::size_t>(std::min<std::uint64_t>(
+        element.count, std::max<std::size_t>(1, batch_bytes_ / (floats * sizeof(float)))));
     if (vertices_.empty()) vertices_.resize(room * floats);
     if constexpr (Source::kBinary) {
       if (element.fixed_size && element.stride <= in_->capacity() / 2)

@@ -14,6 +14,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <memory>
 #include <random>
 #include <string>
 #include <utility>
@@ -25,7 +26,7 @@ namespace octolod {
 namespace {
 
 constexpr std::size_t kBufferBytes = std::size_t{64} << 10;
-// Room one encoded vertex or triangle needs at most (ascii: 14 floats of <= 16 characters).
+// Room one encoded vertex or triangle needs at most (ascii: 14 values of <= 33 characters).
 constexpr std::size_t kMaxRecordBytes = 512;
 
 ply::Header header_for(const PlyWriteOptions& options, std::uint64_t vertex_count,
@@ -71,7 +72,6 @@ class FileWriter final : public PlyWriter {
         layout_(options.layout), color_type_(options.color_type), vertex_count_(vertex_count),
         triangle_count_(triangle_count),
         swap_(options.format != PlyFormat::ascii && !ply::native_format_is(options.format)) {
-    buffer_.reserve(kBufferBytes + kMaxRecordBytes);
   }
 
   ~FileWriter() override {
@@ -80,8 +80,14 @@ class FileWriter final : public PlyWriter {
   }
 
   Status start(const std::string& header) {
-    buffer_.insert(buffer_.end(), header.begin(), header.end());
-    return flush_if_full();
+    for (std::size_t done = 0; done < header.size();) {
+      const std::size_t n = std::min(header.size() - done, kBufferBytes - used_);
+      std::memcpy(buffer_.get() + used_, header.data() + done, n);
+      used_ += n;
+      done += n;
+      OCTOLOD_RETURN_IF_ERROR(flush_if_full());
+    }
+    return {};
   }
 
   Status write_vertices(std::span<const float> vertices) override {
@@ -154,7 +160,11 @@ class FileWriter final : public PlyWriter {
     return failure_;
   }
 
-  void put(std::string_view text) { buffer_.insert(buffer_.end(), text.begin(), text.end()); }
+  // Appends to the buffer; flush_if_full() after each record keeps kMaxRecordBytes free.
+  void put(const char* bytes, std::size_t n) {
+    std::memcpy(buffer_.get() + used_, bytes, n);
+    used_ += n;
+  }
 
   template <class T>
   void put_binary(T value) {
@@ -162,21 +172,19 @@ class FileWriter final : public PlyWriter {
     if constexpr (sizeof(T) == 4) {
       std::uint32_t bits = std::bit_cast<std::uint32_t>(value);
       if (swap_) bits = ply::byte_swap(bits);
-      char bytes[4];
-      std::memcpy(bytes, &bits, 4);
-      buffer_.insert(buffer_.end(), bytes, bytes + 4);
+      put(reinterpret_cast<const char*>(&bits), 4);
     } else {
-      buffer_.push_back(static_cast<char>(value));
+      buffer_[used_++] = static_cast<char>(value);
     }
   }
 
   template <class T>
   void put_text(T value, char separator) {
-    char text[32];
-    const auto [end, ec] = std::to_chars(text, text + sizeof(text), value);
+    char* out = buffer_.get() + used_;
+    const auto [end, ec] = std::to_chars(out, out + 32, value);
     (void)ec;  // 32 characters hold any float or 32-bit integer
-    buffer_.insert(buffer_.end(), text, end);
-    buffer_.push_back(separator);
+    *end = separator;
+    used_ = static_cast<std::size_t>(end + 1 - buffer_.get());
   }
 
   void encode_vertex(const float* v) {
@@ -201,7 +209,7 @@ class FileWriter final : public PlyWriter {
 
   void encode_triangle(const std::uint32_t* t) {
     if (format_ == PlyFormat::ascii) {
-      put("3 ");
+      put("3 ", 2);
       put_text(t[0], ' ');
       put_text(t[1], ' ');
       put_text(t[2], '\n');
@@ -211,19 +219,19 @@ class FileWriter final : public PlyWriter {
     }
   }
 
-  Status flush_if_full() { return buffer_.size() >= kBufferBytes ? flush() : Status{}; }
+  Status flush_if_full() { return used_ + kMaxRecordBytes > kBufferBytes ? flush() : Status{}; }
 
   Status flush() {
     std::size_t done = 0;
-    while (done < buffer_.size()) {
-      const ssize_t n = ::write(fd_, buffer_.data() + done, buffer_.size() - done);
+    while (done < used_) {
+      const ssize_t n = ::write(fd_, buffer_.get() + done, used_ - done);
       if (n < 0) {
         if (errno == EINTR) continue;
         return fail("write failed");
       }
       done += static_cast<std::size_t>(n);
     }
-    buffer_.clear();
+    used_ = 0;
     return {};
   }
 
@@ -236,7 +244,8 @@ class FileWriter final : public PlyWriter {
   std::uint64_t vertex_count_;
   std::uint64_t triangle_count_;
   bool swap_;
-  std::vector<char> buffer_;
+  std::unique_ptr<char[]> buffer_ = std::make_unique<char[]>(kBufferBytes);
+  std::size_t used_ = 0;
   std::uint64_t vertices_written_ = 0;
   std::uint64_t triangles_written_ = 0;
   bool finished_ = false;
