@@ -141,7 +141,7 @@ TEST(PlyReader, HugePolygonFanSpansBatches) {
                        "element face 1\nproperty list ushort uint vertex_indices\nend_header\n";
     for (std::uint32_t i = 0; i < kSides; ++i) {
       if (binary) {
-        for (int k = 0; k < 3; ++k) append_scalar(text, static_cast<float>(i + k), big);
+        for (std::uint32_t k = 0; k < 3; ++k) append_scalar(text, static_cast<float>(i + k), big);
       } else {
         text += std::to_string(i) + " " + std::to_string(i + 1) + " " + std::to_string(i + 2) + "\n";
       }

@@ -72,8 +72,8 @@ class BinarySource {
   }
   Status skip_values(ScalarType type, std::uint64_t count) {
     const std::uint64_t start = in_.offset();
-    const std::uint64_t bytes = count * size_of(type);  // count < 2^64 / 8: it came from a list
-                                                          // count of at most 32 bits
+    // No overflow: list counts have at most 32 bits and items at most 8 bytes.
+    const std::uint64_t bytes = count * size_of(type);
     OCTOLOD_RETURN_IF_ERROR(in_.skip(bytes));
     if (in_.offset() > in_.file_size())
       return bad_input_error(message_at_offset(
