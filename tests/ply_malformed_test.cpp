@@ -141,6 +141,9 @@ std::vector<MalformedCase> malformed_cases() {
   };
 }
 
+// Names the case in test listings instead of dumping its bytes.
+void PrintTo(const MalformedCase& c, std::ostream* os) { *os << c.name; }
+
 class PlyMalformed : public ::testing::TestWithParam<MalformedCase> {};
 
 TEST_P(PlyMalformed, FailsNamingFileLocationAndProblem) {

@@ -35,6 +35,10 @@ struct RoundTripCase {
   PlyColorType color_type;
 };
 
+void PrintTo(const RoundTripCase& c, std::ostream* os) {
+  *os << c.layout.describe() << (c.color_type == PlyColorType::uchar ? " uchar" : " float");
+}
+
 class PlyRoundTrip : public ::testing::TestWithParam<RoundTripCase> {};
 
 TEST_P(PlyRoundTrip, EveryFormatPairIsBitExact) {
