@@ -25,6 +25,8 @@ void print_json(const nlohmann::json& document);
 // Parses "64M", "512K", "2G", "1048576" (binary units) into bytes.
 Result<std::uint64_t> parse_byte_size(const std::string& text);
 
+void add_sample_command(CLI::App& app, CommandContext& context);
+
 
 
 }  // namespace octolod::cli

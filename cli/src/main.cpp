@@ -48,6 +48,7 @@ int main(int argc, char** argv) {
   app.add_flag("--json", context.json, "Machine-readable output: one JSON document on stdout");
   app.add_flag("--progress", context.progress,
                "Human progress on stderr (default: only when stderr is a terminal)");
+  add_sample_command(app, context);
 
 
 

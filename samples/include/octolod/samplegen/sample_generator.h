@@ -1,0 +1,125 @@
+// Procedural sample meshes for `octolod sample`, the tests and the benchmarks: a noise-displaced
+// closed rock, an open fBm terrain, a city of flat-shaded boxes. Any size from a few dozen to a
+// billion triangles, streamed in bounded memory, bit-identical on every platform for the same
+// SampleSpec (own integer hash noise and own sin/cos, no libm transcendentals, no threads).
+//
+// Coordinates (model units, y up, triangles counter-clockwise seen from outside / above):
+//   rock     radius about 1 around the origin (star-shaped: radius 1 + 0.3 * fBm of the direction)
+//   terrain  x in [0, 100], z in [0, 100 * rows / columns], heights within about +-14
+//   city     lots of 12 x 12 on the ground plane y = 0 from (0, 0, 0), buildings up to ~60 high
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <memory>
+#include <span>
+#include <string>
+#include <string_view>
+
+#include "octolod/formats/ply.h"
+#include "octolod/formats/status.h"
+#include "octolod/formats/vertex_layout.h"
+
+namespace octolod::samplegen {
+
+enum class Shape {
+  // Closed 2-manifold; a latitude/longitude sphere whose rings have a vertex count proportional
+  // to their circumference (no slivers at the poles), zipped together ring by ring. Shared
+  // vertices; the only repeated positions are the u = 0 / u = 1 seam copies (longitude 0).
+  // Spherical uv (u = longitude / 2pi, v = 1 at the north pole, 0 at the south), analytic
+  // normals of the displaced surface, colour by height and noise.
+  rock,
+  // Open heightfield grid, shared vertices, planar uv (u = x / 100, v = z / 100), analytic
+  // normals, colour by height and slope. Its boundary is the rectangle of the grid.
+  terrain,
+  // A ground quad, then one box per lot (height varies, taller downtown). Every box face has
+  // its own 4 vertices with the face normal (flat shading), uv in units of 10 model units per
+  // face, one colour per box. Each box is closed on its own.
+  city,
+};
+
+std::string_view to_string(Shape shape);
+
+struct SampleSpec {
+  Shape shape = Shape::rock;
+  // Wanted triangle count. The mesh has within 2% of it for kMinTriangles <= triangles (exactly
+  // 2*floor(triangles/2) for the rock; city: 2 + 12*boxes).
+  std::uint64_t triangles = 40'000;
+  VertexLayout layout{true, true, true};
+  std::uint64_t seed = 1;
+};
+
+inline constexpr std::uint64_t kMinTriangles = 16;
+// Keeps every vertex index within 32 bits for every shape (the city has 2 vertices per triangle).
+inline constexpr std::uint64_t kMaxTriangles = 1'000'000'000;
+
+struct SampleCounts {
+  std::uint64_t vertices = 0;
+  std::uint64_t triangles = 0;
+  friend bool operator==(const SampleCounts&, const SampleCounts&) = default;
+};
+
+// The exact counts the stream for `spec` emits, without generating anything (O(sqrt(N)) for the
+// rock, O(1) otherwise). usage error when spec.triangles is outside [kMinTriangles, kMaxTriangles].
+Result<SampleCounts> sample_counts(const SampleSpec& spec);
+
+struct SampleBatch {
+  enum class Kind { vertices, triangles, end };
+  Kind kind = Kind::end;
+  // Index of the batch's first vertex / triangle in the stream of them.
+  std::uint64_t first = 0;
+  // kind == vertices: count * layout.floats() floats in VertexLayout order.
+  // Valid until the next call to next() or the stream's destruction.
+  std::span<const float> vertices;
+  // kind == triangles: 3 vertex indices per triangle, each < counts().vertices.
+  std::span<const std::uint32_t> triangles;
+};
+
+struct SampleStreamOptions {
+  // Upper bound on one batch's data: memory use is about this, whatever the triangle count.
+  // Larger batches mean fewer calls. Minimum 4 KiB.
+  std::size_t batch_bytes = std::size_t{1} << 20;
+};
+
+// Emits all vertices, then all triangles, in batches (like PlyReader), then Kind::end forever.
+class SampleStream {
+ public:
+  static Result<std::unique_ptr<SampleStream>> create(const SampleSpec& spec,
+                                                      const SampleStreamOptions& options = {});
+  ~SampleStream();
+  SampleStream(const SampleStream&) = delete;
+  SampleStream& operator=(const SampleStream&) = delete;
+
+  const SampleSpec& spec() const;
+  const SampleCounts& counts() const;
+  SampleBatch next();
+
+  class Impl;
+
+ private:
+  explicit SampleStream(std::unique_ptr<Impl> impl);
+  std::unique_ptr<Impl> impl_;
+};
+
+// Called with the vertices + triangles emitted so far and their total, after every batch.
+using SampleProgress = std::function<void(std::uint64_t done, std::uint64_t total)>;
+
+// Streams the sample into a PLY file (uchar colours; the header's comment names the spec).
+// The file appears only when complete (PlyWriter's temporary + rename). I/O errors name the file.
+Status write_sample_ply(const SampleSpec& spec, const std::filesystem::path& path,
+                        PlyFormat format = PlyFormat::binary_little_endian,
+                        const SampleProgress& progress = {});
+
+// Command-line vocabulary, shared by `octolod sample` and the benchmarks. All return usage
+// errors that quote the text.
+// "rock" | "terrain" | "city".
+Result<Shape> parse_shape(std::string_view text);
+// "200000", "2e5", "200K", "20M", "1.5G" (decimal suffixes K = 1e3, M = 1e6, G = 1e9); the value
+// is rounded to an integer and must be in [kMinTriangles, kMaxTriangles].
+Result<std::uint64_t> parse_triangle_count(std::string_view text);
+// Comma-separated subset of normal,color,uv (also "colour"); "" or "none" is positions only.
+Result<VertexLayout> parse_attributes(std::string_view text);
+
+}  // namespace octolod::samplegen

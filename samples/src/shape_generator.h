@@ -1,0 +1,51 @@
+// The interface each shape implements for SampleStream (sample_generator.cpp): exact counts up
+// front, then vertices and triangles produced sequentially into caller-owned memory.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+
+#include "octolod/formats/vertex_layout.h"
+#include "octolod/samplegen/sample_generator.h"
+
+namespace octolod::samplegen {
+
+class ShapeGenerator {
+ public:
+  virtual ~ShapeGenerator() = default;
+  virtual SampleCounts counts() const = 0;
+  // Writes the next `count` vertices (layout.floats() floats each); never more than remain.
+  virtual void next_vertices(std::size_t count, float* out) = 0;
+  // Writes the next `count` triangles (3 indices each); never more than remain.
+  virtual void next_triangles(std::size_t count, std::uint32_t* out) = 0;
+};
+
+// Construction is cheap (no generation): O(sqrt(N)) for the rock's ring table, O(1) otherwise.
+// spec.triangles is already within [kMinTriangles, kMaxTriangles].
+std::unique_ptr<ShapeGenerator> make_rock(const SampleSpec& spec);
+std::unique_ptr<ShapeGenerator> make_terrain(const SampleSpec& spec);
+std::unique_ptr<ShapeGenerator> make_city(const SampleSpec& spec);
+
+// Writes one vertex in VertexLayout order, skipping absent attributes; returns the next slot.
+struct VertexAttributes {
+  double position[3];
+  double normal[3];
+  double color[3];
+  double uv[2];
+};
+inline float* put_vertex(const VertexLayout& layout, const VertexAttributes& v, float* out) {
+  for (double x : v.position) *out++ = static_cast<float>(x);
+  if (layout.normal)
+    for (double x : v.normal) *out++ = static_cast<float>(x);
+  if (layout.color)
+    for (double x : v.color) *out++ = static_cast<float>(x);
+  if (layout.uv)
+    for (double x : v.uv) *out++ = static_cast<float>(x);
+  return out;
+}
+
+inline double clamp01(double x) { return x < 0.0 ? 0.0 : (x > 1.0 ? 1.0 : x); }
+inline double mix(double a, double b, double t) { return a + (b - a) * t; }
+
+}  // namespace octolod::samplegen
