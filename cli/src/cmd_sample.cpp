@@ -1,10 +1,12 @@
 // octolod sample: writes a deterministic procedural mesh (rock, terrain, city) of about N
 // triangles as PLY, streaming, so any N runs in a few MB (see octolod/samplegen).
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
 #include <string>
 #include <system_error>
+#include <thread>
 
 #include "command.h"
 #include "octolod/samplegen/sample_generator.h"
@@ -42,7 +44,8 @@ int run_sample(const SampleArgs& args, const CommandContext& context) {
   const auto start = std::chrono::steady_clock::now();
   const Status written = write_sample_ply(
       spec, args.output, args.ascii ? PlyFormat::ascii : PlyFormat::binary_little_endian,
-      [&](std::uint64_t done, std::uint64_t total) { progress.update("sample", done, total); });
+      [&](std::uint64_t done, std::uint64_t total) { progress.update("sample", done, total); },
+      SampleStreamOptions{.threads = std::max(1u, std::thread::hardware_concurrency())});
   if (!written.ok()) return report(written);
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

@@ -50,19 +50,20 @@ class CityGenerator final : public ShapeGenerator {
     return {ground_vertices() + kBoxVertices * boxes_, 2 * strips_ + kBoxTriangles * boxes_};
   }
 
-  void next_vertices(std::size_t count, float* out) override {
-    for (std::size_t k = 0; k < count; ++k, ++vertex_) {
-      if (vertex_ < ground_vertices()) {
-        out = put_vertex(layout_, ground_vertex(vertex_), out);
+  void vertices(std::uint64_t first, std::size_t count, float* out) const override {
+    std::uint64_t current_box = ~std::uint64_t{0};
+    Box box{};
+    for (std::uint64_t vertex = first; vertex < first + count; ++vertex) {
+      if (vertex < ground_vertices()) {
+        out = put_vertex(layout_, ground_vertex(vertex), out);
         continue;
       }
-      const std::uint64_t local = vertex_ - ground_vertices();
-      const std::uint64_t box = local / kBoxVertices;
-      if (box != cached_box_) {
-        box_ = make_box(box);
-        cached_box_ = box;
+      const std::uint64_t local = vertex - ground_vertices();
+      if (local / kBoxVertices != current_box) {
+        current_box = local / kBoxVertices;
+        box = make_box(current_box);
       }
-      out = put_vertex(layout_, box_vertex(box_, (local % kBoxVertices) / 4, local % 4), out);
+      out = put_vertex(layout_, box_vertex(box, (local % kBoxVertices) / 4, local % 4), out);
     }
   }
 
@@ -156,10 +157,7 @@ class CityGenerator final : public ShapeGenerator {
   std::uint64_t strips_ = 1;   // ground quads
   std::uint64_t columns_ = 1;  // lots along x
   std::uint64_t rows_ = 1;     // lots along z
-  std::uint64_t vertex_ = 0;   // cursors
-  std::uint64_t triangle_ = 0;
-  std::uint64_t cached_box_ = ~std::uint64_t{0};
-  Box box_{};
+  std::uint64_t triangle_ = 0;  // cursor
 };
 
 }  // namespace

@@ -92,15 +92,17 @@ class RockGenerator final : public ShapeGenerator {
 
   SampleCounts counts() const override { return counts_; }
 
-  void next_vertices(std::size_t count, float* out) override {
-    for (std::size_t i = 0; i < count; ++i) {
-      out = put_vertex(layout_, vertex(v_ring_, v_j_), out);
+  void vertices(std::uint64_t first, std::size_t count, float* out) const override {
+    // The ring holding `first`: the last ring starting at or before it.
+    std::size_t ring = static_cast<std::size_t>(
+        std::upper_bound(ring_start_.begin(), ring_start_.end(), first) - ring_start_.begin() - 1);
+    std::uint64_t j = first - ring_start_[ring];
+    for (std::size_t done = 0; done < count; ++ring, j = 0) {
       // Ring 0 and ring n are the poles: one vertex each.
-      const std::uint64_t ring_vertices = v_ring_ == 0 || v_ring_ > rings_ ? 1 : m_[v_ring_ - 1] + 1;
-      if (++v_j_ == ring_vertices) {
-        v_j_ = 0;
-        ++v_ring_;
-      }
+      const std::uint64_t ring_vertices = ring == 0 || ring > rings_ ? 1 : m_[ring - 1] + 1;
+      const SinCos polar = sincos_turns(static_cast<double>(ring) / static_cast<double>(2 * (rings_ + 1)));
+      for (; j < ring_vertices && done < count; ++j, ++done)
+        out = put_vertex(layout_, vertex(ring, polar, j), out);
     }
   }
 
@@ -109,10 +111,9 @@ class RockGenerator final : public ShapeGenerator {
   }
 
  private:
-  // Vertex j of ring k (k = 0: north pole, k = n: south pole).
-  VertexAttributes vertex(std::uint64_t ring, std::uint64_t j) const {
+  // Vertex j of ring k (k = 0: north pole, k = n: south pole) at polar angle k / 2n turns.
+  VertexAttributes vertex(std::uint64_t ring, const SinCos& polar, std::uint64_t j) const {
     const double n = static_cast<double>(rings_ + 1);
-    const SinCos polar = sincos_turns(static_cast<double>(ring) / (2.0 * n));
     const bool pole = ring == 0 || ring > rings_;
     const std::uint64_t m = pole ? 1 : m_[ring - 1];
     // j = m is the seam copy of j = 0: the same angle, hence the same bits.
@@ -197,9 +198,6 @@ class RockGenerator final : public ShapeGenerator {
   Fbm tint_;
   std::vector<std::uint64_t> ring_start_;  // first vertex of ring k (0: north pole)
   SampleCounts counts_;
-  // Vertex cursor.
-  std::uint64_t v_ring_ = 0;
-  std::uint64_t v_j_ = 0;
   // Triangle cursor: band, position on its upper (a) and lower (b) ring.
   std::size_t band_ = 0;
   std::uint64_t a_ = 0;

@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <thread>
 #include <utility>
 #include <vector>
 
@@ -60,6 +61,7 @@ class SampleStream::Impl {
     batch_vertices_ = std::max<std::size_t>(1, bytes / spec.layout.bytes());
     batch_triangles_ = bytes / 12;
     vertex_buffer_.resize(batch_vertices_ * spec.layout.floats());
+    threads_ = std::max(1u, options.threads);
   }
 
   SampleBatch next() {
@@ -67,7 +69,7 @@ class SampleStream::Impl {
     if (vertices_done_ < counts_.vertices) {
       const auto count = static_cast<std::size_t>(
           std::min<std::uint64_t>(batch_vertices_, counts_.vertices - vertices_done_));
-      generator_->next_vertices(count, vertex_buffer_.data());
+      generate_vertices(count);
       batch.kind = SampleBatch::Kind::vertices;
       batch.first = vertices_done_;
       batch.vertices = {vertex_buffer_.data(), count * spec_.layout.floats()};
@@ -93,11 +95,28 @@ class SampleStream::Impl {
   const SampleCounts& counts() const { return counts_; }
 
  private:
+  // Vertices [vertices_done_, + count) into the buffer, split over threads_ when worth it.
+  void generate_vertices(std::size_t count) {
+    constexpr std::size_t kMinPerThread = 2048;  // below this, a thread costs more than it saves
+    const std::size_t parts = std::clamp<std::size_t>(count / kMinPerThread, 1, threads_);
+    const std::size_t floats = spec_.layout.floats();
+    std::vector<std::jthread> helpers;
+    for (std::size_t p = 1; p < parts; ++p) {
+      const std::size_t begin = count * p / parts, end = count * (p + 1) / parts;
+      helpers.emplace_back([this, begin, end, floats] {
+        generator_->vertices(vertices_done_ + begin, end - begin,
+                             vertex_buffer_.data() + begin * floats);
+      });
+    }
+    generator_->vertices(vertices_done_, count / parts, vertex_buffer_.data());
+  }
+
   SampleSpec spec_;
   std::unique_ptr<ShapeGenerator> generator_;
   SampleCounts counts_;
   std::size_t batch_vertices_ = 0;
   std::size_t batch_triangles_ = 0;
+  unsigned threads_ = 1;
   std::vector<float> vertex_buffer_;            // during the vertex phase
   std::vector<std::uint32_t> triangle_buffer_;  // during the triangle phase
   std::uint64_t vertices_done_ = 0;
@@ -117,8 +136,9 @@ const SampleCounts& SampleStream::counts() const { return impl_->counts(); }
 SampleBatch SampleStream::next() { return impl_->next(); }
 
 Status write_sample_ply(const SampleSpec& spec, const std::filesystem::path& path,
-                        PlyFormat format, const SampleProgress& progress) {
-  Result<std::unique_ptr<SampleStream>> stream = SampleStream::create(spec);
+                        PlyFormat format, const SampleProgress& progress,
+                        const SampleStreamOptions& stream_options) {
+  Result<std::unique_ptr<SampleStream>> stream = SampleStream::create(spec, stream_options);
   if (!stream.ok()) return stream.status();
   const SampleCounts counts = stream.value()->counts();
 

@@ -1,5 +1,6 @@
 // The interface each shape implements for SampleStream (sample_generator.cpp): exact counts up
-// front, then vertices and triangles produced sequentially into caller-owned memory.
+// front, vertices by index range (pure and const, so ranges can be generated in parallel), then
+// triangles produced sequentially; all into caller-owned memory.
 #pragma once
 
 #include <cstddef>
@@ -15,8 +16,9 @@ class ShapeGenerator {
  public:
   virtual ~ShapeGenerator() = default;
   virtual SampleCounts counts() const = 0;
-  // Writes the next `count` vertices (layout.floats() floats each); never more than remain.
-  virtual void next_vertices(std::size_t count, float* out) = 0;
+  // Writes vertices [first, first + count) (layout.floats() floats each), within counts().
+  // Thread-safe: a pure function of the spec and the indices.
+  virtual void vertices(std::uint64_t first, std::size_t count, float* out) const = 0;
   // Writes the next `count` triangles (3 indices each); never more than remain.
   virtual void next_triangles(std::size_t count, std::uint32_t* out) = 0;
 };

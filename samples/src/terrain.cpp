@@ -58,12 +58,13 @@ class TerrainGenerator final : public ShapeGenerator {
   }
 
   // Row-major: vertex (i, j) at x = i * spacing, z = j * spacing is i + j * (columns + 1).
-  void next_vertices(std::size_t count, float* out) override {
+  void vertices(std::uint64_t first, std::size_t count, float* out) const override {
+    std::uint64_t i = first % (grid_.columns + 1), j = first / (grid_.columns + 1);
     for (std::size_t k = 0; k < count; ++k) {
-      out = put_vertex(layout_, vertex(vi_, vj_), out);
-      if (++vi_ > grid_.columns) {
-        vi_ = 0;
-        ++vj_;
+      out = put_vertex(layout_, vertex(i, j), out);
+      if (++i > grid_.columns) {
+        i = 0;
+        ++j;
       }
     }
   }
@@ -127,7 +128,6 @@ class TerrainGenerator final : public ShapeGenerator {
   Grid grid_;
   double spacing_;  // model units between grid lines, both directions
   Fbm height_;
-  std::uint64_t vi_ = 0, vj_ = 0;  // vertex cursor
   std::uint64_t ti_ = 0, tj_ = 0;  // quad cursor
   bool second_ = false;            // next triangle is the quad's second
 };

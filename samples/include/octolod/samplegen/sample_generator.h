@@ -81,6 +81,9 @@ struct SampleStreamOptions {
   // Upper bound on one batch's data: memory use is about this, whatever the triangle count.
   // Larger batches mean fewer calls. Minimum 4 KiB.
   std::size_t batch_bytes = std::size_t{1} << 20;
+  // Threads generating each vertex batch (split into contiguous ranges; the calling thread does
+  // the first). The output is bit-identical for any value; 0 is taken as 1.
+  unsigned threads = 1;
 };
 
 // Emits all vertices, then all triangles, in batches (like PlyReader), then Kind::end forever.
@@ -110,7 +113,8 @@ using SampleProgress = std::function<void(std::uint64_t done, std::uint64_t tota
 // The file appears only when complete (PlyWriter's temporary + rename). I/O errors name the file.
 Status write_sample_ply(const SampleSpec& spec, const std::filesystem::path& path,
                         PlyFormat format = PlyFormat::binary_little_endian,
-                        const SampleProgress& progress = {});
+                        const SampleProgress& progress = {},
+                        const SampleStreamOptions& stream_options = {});
 
 // Command-line vocabulary, shared by `octolod sample` and the benchmarks. All return usage
 // errors that quote the text.
