@@ -5,6 +5,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <array>
 #include <bit>
 #include <cmath>
@@ -12,6 +13,8 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <map>
 #include <set>
 #include <string>
@@ -165,7 +168,7 @@ TEST(SampleCounts, DeclaredCountsAreEmittedForEveryShapeSizeAndLayout) {
       }
 }
 
-TEST(SampleCounts, TriangleCountIsWithinOnePercentOfTheTarget) {
+TEST(SampleCounts, TriangleCountIsWithinOnePercentAtEveryScale) {
   for (Shape shape : kShapes)
     for (std::uint64_t n : {std::uint64_t{100}, std::uint64_t{101}, std::uint64_t{1'000},
                             std::uint64_t{77'777}, std::uint64_t{1'000'000},
@@ -189,6 +192,16 @@ TEST(SampleCounts, RockAndCityHitTheTargetOrOneBelow) {
       EXPECT_TRUE(counts->triangles == n || counts->triangles + 1 == n)
           << to_string(shape) << " N=" << n << " made " << counts->triangles;
     }
+}
+
+TEST(SampleCounts, TerrainIsWithinThreePercentFromAHundredAndOnePercentFromAThousand) {
+  for (std::uint64_t n = 100; n < 5000; ++n) {
+    const Result<SampleCounts> counts = sample_counts(spec_of(Shape::terrain, n));
+    ASSERT_TRUE(counts.ok());
+    ASSERT_LE(std::fabs(static_cast<double>(counts->triangles) - static_cast<double>(n)),
+              (n < 1000 ? 0.03 : 0.01) * static_cast<double>(n))
+        << "N=" << n << " made " << counts->triangles;
+  }
 }
 
 TEST(SampleCounts, OutOfRangeTargetsAreUsageErrors) {
@@ -508,6 +521,22 @@ TEST_F(SampleFiles, WrittenPlyReadsBackWithTheSameData) {
       EXPECT_EQ(last_done, last_total);
       EXPECT_EQ(last_total, read->info.vertex_count + read->triangles.size() / 3);
     }
+}
+
+TEST_F(SampleFiles, CommittedSmallRockIsTheGeneratorsOutput) {
+  // samples/rock_small.ply must be regenerated whenever the generator changes; its header
+  // comment is the command that reproduces it.
+  const std::filesystem::path committed =
+      std::filesystem::path(__FILE__).parent_path().parent_path() / "samples" / "rock_small.ply";
+  if (!std::filesystem::exists(committed)) GTEST_SKIP() << committed << " not found";
+  const std::filesystem::path fresh = dir_ / "rock_small.ply";
+  ASSERT_TRUE(write_sample_ply(spec_of(Shape::rock, 40000, kAll, 1), fresh).ok());
+  std::ifstream a(committed, std::ios::binary), b(fresh, std::ios::binary);
+  const std::string committed_bytes{std::istreambuf_iterator<char>(a), {}};
+  const std::string fresh_bytes{std::istreambuf_iterator<char>(b), {}};
+  EXPECT_LT(committed_bytes.size(), std::size_t{2} << 20);
+  EXPECT_TRUE(committed_bytes == fresh_bytes)
+      << "regenerate: octolod sample --shape rock --triangles 40K -o samples/rock_small.ply";
 }
 
 TEST_F(SampleFiles, UnwritableDestinationIsAnIoError) {

@@ -146,8 +146,12 @@ Status write_sample_ply(const SampleSpec& spec, const std::filesystem::path& pat
   options.format = format;
   options.layout = spec.layout;
   options.color_type = PlyColorType::uchar;
+  // The command that reproduces the file byte for byte.
+  const std::string layout = spec.layout.describe();
+  const std::string attributes = layout == "position" ? "none" : layout.substr(9);  // "position,"
   options.comments.push_back("octolod sample --shape " + std::string(to_string(spec.shape)) +
-                             " --triangles " + std::to_string(spec.triangles) + " --seed " +
+                             " --triangles " + std::to_string(spec.triangles) +
+                             " --attributes " + attributes + " --seed " +
                              std::to_string(spec.seed));
   Result<std::unique_ptr<PlyWriter>> writer =
       PlyWriter::create(path, options, counts.vertices, counts.triangles);

@@ -29,7 +29,7 @@ struct Grid {
 Grid grid_for(std::uint64_t triangles) {
   const double side = std::sqrt(static_cast<double>(triangles) / 2.0);
   const auto widest = static_cast<std::uint64_t>(std::ceil(side));
-  const auto narrowest = std::max<std::uint64_t>(1, static_cast<std::uint64_t>(side * 0.7));
+  const auto narrowest = std::max<std::uint64_t>(1, static_cast<std::uint64_t>(side * 0.5));
   Grid best;
   std::uint64_t best_error = ~std::uint64_t{0};
   for (std::uint64_t columns = widest; columns >= narrowest; --columns) {

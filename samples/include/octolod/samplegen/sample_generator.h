@@ -1,12 +1,15 @@
 // Procedural sample meshes for `octolod sample`, the tests and the benchmarks: a noise-displaced
-// closed rock, an open fBm terrain, a city of flat-shaded boxes. Any size from a few dozen to a
-// billion triangles, streamed in bounded memory, bit-identical on every platform for the same
-// SampleSpec (own integer hash noise and own sin/cos, no libm transcendentals, no threads).
+// closed rock, an open fBm terrain, a city of flat-shaded boxes. Any size from 16 to a billion
+// triangles, streamed in bounded memory, bit-identical on every platform, optimization level and
+// thread count for the same SampleSpec (own integer hash noise and own sin/cos: only + - * /
+// sqrt floor, no libm transcendentals, no std::*_distribution, no fused multiply-add).
+// Finer meshes get more noise octaves on the same coarse shape (detail the mesh can resolve).
 //
 // Coordinates (model units, y up, triangles counter-clockwise seen from outside / above):
-//   rock     radius about 1 around the origin (star-shaped: radius 1 + 0.3 * fBm of the direction)
-//   terrain  x in [0, 100], z in [0, 100 * rows / columns], heights within about +-14
-//   city     lots of 12 x 12 on the ground plane y = 0 from (0, 0, 0), buildings up to ~60 high
+//   rock     around the origin, |p| < 1.3: direction d scaled by 1 + 0.3 fBm(d) (star-shaped,
+//            never self-intersecting), then by (1, 0.72, 0.86) per axis
+//   terrain  x in [0, 100], z in [0, 100 * rows / columns], y in (-7, 21) (typically -7..14)
+//   city     12 x 12 lots on the ground plane y = 0 starting at the origin, buildings 3..60 high
 #pragma once
 
 #include <cstddef>
@@ -44,8 +47,9 @@ std::string_view to_string(Shape shape);
 
 struct SampleSpec {
   Shape shape = Shape::rock;
-  // Wanted triangle count. The mesh has within 2% of it for kMinTriangles <= triangles (exactly
-  // 2*floor(triangles/2) for the rock; city: 2 + 12*boxes).
+  // Wanted triangle count. Rock and city make exactly this many or one less (odd counts);
+  // the terrain, a grid of 2 * columns * rows, is within 3% from 100 triangles up and within
+  // 1% from 1000 up.
   std::uint64_t triangles = 40'000;
   VertexLayout layout{true, true, true};
   std::uint64_t seed = 1;
