@@ -153,8 +153,8 @@ constexpr Shape kShapes[] = {Shape::rock, Shape::terrain, Shape::city};
 TEST(SampleCounts, DeclaredCountsAreEmittedForEveryShapeSizeAndLayout) {
   for (Shape shape : kShapes)
     for (std::uint64_t n : {16u, 17u, 100u, 999u, 12345u, 60000u})
-      for (VertexLayout layout : {kAll, kNone, VertexLayout{true, false, false},
-                                  VertexLayout{false, true, true}}) {
+      for (VertexLayout layout :
+           {kAll, kNone, VertexLayout{true, false, false}, VertexLayout{false, true, true}}) {
         SCOPED_TRACE(std::string(to_string(shape)) + " N=" + std::to_string(n) + " " +
                      layout.describe());
         const SampleSpec spec = spec_of(shape, n, layout);
@@ -178,8 +178,7 @@ TEST(SampleCounts, TriangleCountIsWithinOnePercentAtEveryScale) {
       const double relative =
           std::fabs(static_cast<double>(counts->triangles) - static_cast<double>(n)) /
           static_cast<double>(n);
-      EXPECT_LE(relative, 0.01) << to_string(shape) << " N=" << n << " made "
-                                << counts->triangles;
+      EXPECT_LE(relative, 0.01) << to_string(shape) << " N=" << n << " made " << counts->triangles;
       EXPECT_LT(counts->vertices, std::uint64_t{1} << 32);
     }
 }
@@ -444,7 +443,7 @@ TEST(SampleAttributes, RockVertexNormalsFaceOutwardAlongTheSurface) {
 
 TEST(SampleParse, TriangleCountsAcceptPlainExponentAndDecimalSuffixes) {
   const std::pair<const char*, std::uint64_t> cases[] = {
-      {"200000", 200000}, {"2e5", 200000}, {"200K", 200000}, {"200k", 200000},
+      {"200000", 200000}, {"2e5", 200000},   {"200K", 200000},   {"200k", 200000},
       {"20M", 20000000},  {"1.5M", 1500000}, {"1G", 1000000000}, {"16", 16}};
   for (const auto& [text, expected] : cases) {
     Result<std::uint64_t> parsed = parse_triangle_count(text);
@@ -510,10 +509,11 @@ TEST_F(SampleFiles, WrittenPlyReadsBackWithTheSameData) {
       const SampleSpec spec = spec_of(shape, 3000, kAll, 9);
       const std::filesystem::path path = dir_ / "sample.ply";
       std::uint64_t last_done = 0, last_total = 0;
-      ASSERT_TRUE(write_sample_ply(spec, path, format, [&](std::uint64_t done, std::uint64_t total) {
-                    EXPECT_GT(done, last_done);
-                    last_done = done, last_total = total;
-                  }).ok());
+      ASSERT_TRUE(
+          write_sample_ply(spec, path, format, [&](std::uint64_t done, std::uint64_t total) {
+            EXPECT_GT(done, last_done);
+            last_done = done, last_total = total;
+          }).ok());
       Result<PlyMesh> read = read_ply(path);
       ASSERT_TRUE(read.ok()) << read.status().message();
       EXPECT_EQ(read->info.format, format);
@@ -555,7 +555,8 @@ std::pair<int, std::string> run_cli(const std::string& arguments) {
   if (pipe == nullptr) return {-1, ""};
   std::string output;
   char buffer[4096];
-  for (std::size_t n; (n = std::fread(buffer, 1, sizeof(buffer), pipe)) > 0;) output.append(buffer, n);
+  for (std::size_t n; (n = std::fread(buffer, 1, sizeof(buffer), pipe)) > 0;)
+    output.append(buffer, n);
   const int status = ::pclose(pipe);
   return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, output};
 }
@@ -563,8 +564,10 @@ std::pair<int, std::string> run_cli(const std::string& arguments) {
 TEST_F(SampleFiles, CliWritesTheGeneratorsMeshAndReportsJson) {
   if (std::getenv("OCTOLOD_CLI") == nullptr) GTEST_SKIP() << "OCTOLOD_CLI not set";
   const std::filesystem::path path = dir_ / "city.ply";
-  const auto [code, output] = run_cli("sample --shape city --triangles 2.5K --attributes uv,normal "
-                                      "--seed 5 -o " + path.string() + " --json");
+  const auto [code, output] = run_cli(
+      "sample --shape city --triangles 2.5K --attributes uv,normal "
+      "--seed 5 -o " +
+      path.string() + " --json");
   ASSERT_EQ(code, 0) << output;
   Result<PlyMesh> read = read_ply(path);
   ASSERT_TRUE(read.ok()) << read.status().message();
@@ -572,9 +575,10 @@ TEST_F(SampleFiles, CliWritesTheGeneratorsMeshAndReportsJson) {
   const SampleSpec spec = spec_of(Shape::city, 2500, VertexLayout{true, false, true}, 5);
   expect_same_mesh(read.value(), generate(spec));
   for (const std::string& field : std::vector<std::string>{
-       "\"file\"", "\"shape\": \"city\"", "\"vertices\": " + std::to_string(read->info.vertex_count),
-        "\"triangles\": 2500", "\"attributes\": \"position,normal,uv\"",
-        "\"bytes\": " + std::to_string(std::filesystem::file_size(path)), "\"seconds\""})
+           "\"file\"", "\"shape\": \"city\"",
+           "\"vertices\": " + std::to_string(read->info.vertex_count), "\"triangles\": 2500",
+           "\"attributes\": \"position,normal,uv\"",
+           "\"bytes\": " + std::to_string(std::filesystem::file_size(path)), "\"seconds\""})
     EXPECT_NE(output.find(field), std::string::npos) << field << " missing in " << output;
 }
 
@@ -595,9 +599,9 @@ TEST_F(SampleFiles, CliExitCodesUsageAndIo) {
   EXPECT_EQ(run_cli("sample --shape rock --triangles 10" + out).first, 1);
   EXPECT_EQ(run_cli("sample --shape rock --triangles 1e4 --attributes bogus" + out).first, 1);
   EXPECT_EQ(run_cli("sample --shape rock --triangles 100").first, 1) << "-o is required";
-  EXPECT_EQ(run_cli("sample --shape rock --triangles 100 -o " + (dir_ / "no" / "x.ply").string())
-                .first,
-            4);
+  EXPECT_EQ(
+      run_cli("sample --shape rock --triangles 100 -o " + (dir_ / "no" / "x.ply").string()).first,
+      4);
   EXPECT_FALSE(std::filesystem::exists(dir_ / "x.ply"));
 }
 

@@ -66,8 +66,8 @@ int run_sample(const SampleArgs& args, const CommandContext& context) {
     std::printf("%s: %s, %llu vertices, %llu triangles (%s), %.1f MB in %.2f s\n",
                 args.output.c_str(), std::string(to_string(spec.shape)).c_str(),
                 static_cast<unsigned long long>(counts->vertices),
-                static_cast<unsigned long long>(counts->triangles),
-                spec.layout.describe().c_str(), static_cast<double>(bytes) / 1e6, seconds);
+                static_cast<unsigned long long>(counts->triangles), spec.layout.describe().c_str(),
+                static_cast<double>(bytes) / 1e6, seconds);
   }
   return 0;
 }
@@ -79,11 +79,13 @@ void add_sample_command(CLI::App& app, CommandContext& context) {
   CLI::App* command = app.add_subcommand(
       "sample", "Write a deterministic procedural mesh (streaming, bounded memory for any size)");
   command->add_option("--shape", args->shape, "rock | terrain | city")->required();
-  command->add_option("--triangles", args->triangles,
-                      "About this many triangles: 200000, 2e5, 200K, 20M")
+  command
+      ->add_option("--triangles", args->triangles,
+                   "About this many triangles: 200000, 2e5, 200K, 20M")
       ->required();
-  command->add_option("--attributes", args->attributes,
-                      "Comma-separated subset of normal,color,uv; 'none' for positions only")
+  command
+      ->add_option("--attributes", args->attributes,
+                   "Comma-separated subset of normal,color,uv; 'none' for positions only")
       ->capture_default_str();
   command->add_option("--seed", args->seed, "Noise seed; same seed, same bytes")
       ->capture_default_str();

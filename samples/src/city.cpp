@@ -13,8 +13,8 @@
 namespace octolod::samplegen {
 namespace {
 
-constexpr double kLot = 12.0;      // lot pitch, model units
-constexpr double kUvUnit = 10.0;   // model units per texture repeat
+constexpr double kLot = 12.0;     // lot pitch, model units
+constexpr double kUvUnit = 10.0;  // model units per texture repeat
 constexpr std::uint32_t kBoxTag = 0x400;
 constexpr std::uint64_t kBoxVertices = 24;
 constexpr std::uint64_t kBoxTriangles = 12;
@@ -38,7 +38,8 @@ struct Box {
 
 class CityGenerator final : public ShapeGenerator {
  public:
-  explicit CityGenerator(const SampleSpec& spec) : layout_(spec.layout), seed_(derive_seed(spec.seed, kBoxTag)) {
+  explicit CityGenerator(const SampleSpec& spec)
+      : layout_(spec.layout), seed_(derive_seed(spec.seed, kBoxTag)) {
     boxes_ = std::max<std::uint64_t>(1, (spec.triangles - 2) / kBoxTriangles);
     strips_ = std::clamp<std::uint64_t>((spec.triangles - kBoxTriangles * boxes_) / 2, 1, 6);
     columns_ = static_cast<std::uint64_t>(std::ceil(std::sqrt(static_cast<double>(boxes_))));
@@ -72,16 +73,20 @@ class CityGenerator final : public ShapeGenerator {
       if (triangle_ < 2 * strips_) {
         // Strip s: corners 2s, 2s+2 at z = 0 and 2s+1, 2s+3 at the far edge; up is +y.
         const auto s = static_cast<std::uint32_t>(triangle_ / 2);
-        if (triangle_ % 2 == 0) out[0] = 2 * s, out[1] = 2 * s + 1, out[2] = 2 * s + 2;
-        else out[0] = 2 * s + 2, out[1] = 2 * s + 1, out[2] = 2 * s + 3;
+        if (triangle_ % 2 == 0)
+          out[0] = 2 * s, out[1] = 2 * s + 1, out[2] = 2 * s + 2;
+        else
+          out[0] = 2 * s + 2, out[1] = 2 * s + 1, out[2] = 2 * s + 3;
         continue;
       }
       const std::uint64_t local = triangle_ - 2 * strips_;
-      const std::uint64_t face_first =
-          ground_vertices() + (local / kBoxTriangles) * kBoxVertices + (local % kBoxTriangles) / 2 * 4;
+      const std::uint64_t face_first = ground_vertices() + (local / kBoxTriangles) * kBoxVertices +
+                                       (local % kBoxTriangles) / 2 * 4;
       const auto f = static_cast<std::uint32_t>(face_first);
-      if (local % 2 == 0) out[0] = f, out[1] = f + 1, out[2] = f + 2;
-      else out[0] = f, out[1] = f + 2, out[2] = f + 3;
+      if (local % 2 == 0)
+        out[0] = f, out[1] = f + 1, out[2] = f + 2;
+      else
+        out[0] = f, out[1] = f + 2, out[2] = f + 3;
     }
   }
 
@@ -107,7 +112,8 @@ class CityGenerator final : public ShapeGenerator {
     const auto id = static_cast<std::uint32_t>(b);
     const auto high = static_cast<std::uint32_t>(b >> 32);
     auto random = [&](std::uint32_t what) { return hash_unit(seed_ ^ high, id, what); };
-    const double column = static_cast<double>(b % columns_), row = static_cast<double>(b / columns_);
+    const double column = static_cast<double>(b % columns_),
+                 row = static_cast<double>(b / columns_);
     const double dx = (column + 0.5) / static_cast<double>(columns_) - 0.5;
     const double dz = (row + 0.5) / static_cast<double>(rows_) - 0.5;
     const double downtown = clamp01(1.0 - std::sqrt(dx * dx + dz * dz) * 1.6);
@@ -154,9 +160,9 @@ class CityGenerator final : public ShapeGenerator {
   VertexLayout layout_;
   std::uint32_t seed_;
   std::uint64_t boxes_ = 1;
-  std::uint64_t strips_ = 1;   // ground quads
-  std::uint64_t columns_ = 1;  // lots along x
-  std::uint64_t rows_ = 1;     // lots along z
+  std::uint64_t strips_ = 1;    // ground quads
+  std::uint64_t columns_ = 1;   // lots along x
+  std::uint64_t rows_ = 1;      // lots along z
   std::uint64_t triangle_ = 0;  // cursor
 };
 

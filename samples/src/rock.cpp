@@ -18,8 +18,8 @@
 namespace octolod::samplegen {
 namespace {
 
-constexpr double kAmplitude = 0.3;  // radial displacement, fraction of the radius
-constexpr double kFrequency = 1.3;  // noise cells per unit of direction
+constexpr double kAmplitude = 0.3;               // radial displacement, fraction of the radius
+constexpr double kFrequency = 1.3;               // noise cells per unit of direction
 constexpr double kScale[3] = {1.0, 0.72, 0.86};  // ellipsoid axes: a rock, not a ball
 constexpr double kSamplesPerCell = 3;  // ring steps across the finest noise cell (no aliasing)
 constexpr std::uint32_t kShapeTag = 0x100;
@@ -74,9 +74,12 @@ std::vector<std::uint64_t> ring_sizes(std::uint64_t triangles) {
 class RockGenerator final : public ShapeGenerator {
  public:
   explicit RockGenerator(const SampleSpec& spec)
-      : layout_(spec.layout), m_(ring_sizes(spec.triangles)), rings_(m_.size()),
+      : layout_(spec.layout),
+        m_(ring_sizes(spec.triangles)),
+        rings_(m_.size()),
         // Ring spacing is pi / n radians on the unit sphere, the space the noise lives in.
-        shape_(resolvable_octaves(1.0 / kFrequency, 3.14159265358979323846 / static_cast<double>(rings_ + 1),
+        shape_(resolvable_octaves(1.0 / kFrequency,
+                                  3.14159265358979323846 / static_cast<double>(rings_ + 1),
                                   kSamplesPerCell),
                spec.seed, kShapeTag),
         tint_(2, spec.seed, kTintTag) {
@@ -100,7 +103,8 @@ class RockGenerator final : public ShapeGenerator {
     for (std::size_t done = 0; done < count; ++ring, j = 0) {
       // Ring 0 and ring n are the poles: one vertex each.
       const std::uint64_t ring_vertices = ring == 0 || ring > rings_ ? 1 : m_[ring - 1] + 1;
-      const SinCos polar = sincos_turns(static_cast<double>(ring) / static_cast<double>(2 * (rings_ + 1)));
+      const SinCos polar =
+          sincos_turns(static_cast<double>(ring) / static_cast<double>(2 * (rings_ + 1)));
       for (; j < ring_vertices && done < count; ++j, ++done)
         out = put_vertex(layout_, vertex(ring, polar, j), out);
     }
@@ -117,8 +121,7 @@ class RockGenerator final : public ShapeGenerator {
     const bool pole = ring == 0 || ring > rings_;
     const std::uint64_t m = pole ? 1 : m_[ring - 1];
     // j = m is the seam copy of j = 0: the same angle, hence the same bits.
-    const SinCos azimuth =
-        sincos_turns(static_cast<double>(j % m) / static_cast<double>(m));
+    const SinCos azimuth = sincos_turns(static_cast<double>(j % m) / static_cast<double>(m));
     const double d[3] = {polar.sin * azimuth.cos, polar.cos, polar.sin * azimuth.sin};
 
     const Noise3 f = shape_(d[0] * kFrequency, d[1] * kFrequency, d[2] * kFrequency);

@@ -20,9 +20,12 @@ namespace octolod::samplegen {
 
 std::string_view to_string(Shape shape) {
   switch (shape) {
-    case Shape::rock: return "rock";
-    case Shape::terrain: return "terrain";
-    case Shape::city: return "city";
+    case Shape::rock:
+      return "rock";
+    case Shape::terrain:
+      return "terrain";
+    case Shape::city:
+      return "city";
   }
   return "unknown";
 }
@@ -39,9 +42,12 @@ Status check_spec(const SampleSpec& spec) {
 
 std::unique_ptr<ShapeGenerator> make_generator(const SampleSpec& spec) {
   switch (spec.shape) {
-    case Shape::rock: return make_rock(spec);
-    case Shape::terrain: return make_terrain(spec);
-    case Shape::city: return make_city(spec);
+    case Shape::rock:
+      return make_rock(spec);
+    case Shape::terrain:
+      return make_terrain(spec);
+    case Shape::city:
+      return make_city(spec);
   }
   return make_rock(spec);
 }
@@ -135,9 +141,8 @@ const SampleSpec& SampleStream::spec() const { return impl_->spec(); }
 const SampleCounts& SampleStream::counts() const { return impl_->counts(); }
 SampleBatch SampleStream::next() { return impl_->next(); }
 
-Status write_sample_ply(const SampleSpec& spec, const std::filesystem::path& path,
-                        PlyFormat format, const SampleProgress& progress,
-                        const SampleStreamOptions& stream_options) {
+Status write_sample_ply(const SampleSpec& spec, const std::filesystem::path& path, PlyFormat format,
+                        const SampleProgress& progress, const SampleStreamOptions& stream_options) {
   Result<std::unique_ptr<SampleStream>> stream = SampleStream::create(spec, stream_options);
   if (!stream.ok()) return stream.status();
   const SampleCounts counts = stream.value()->counts();
@@ -150,9 +155,8 @@ Status write_sample_ply(const SampleSpec& spec, const std::filesystem::path& pat
   const std::string layout = spec.layout.describe();
   const std::string attributes = layout == "position" ? "none" : layout.substr(9);  // "position,"
   options.comments.push_back("octolod sample --shape " + std::string(to_string(spec.shape)) +
-                             " --triangles " + std::to_string(spec.triangles) +
-                             " --attributes " + attributes + " --seed " +
-                             std::to_string(spec.seed));
+                             " --triangles " + std::to_string(spec.triangles) + " --attributes " +
+                             attributes + " --seed " + std::to_string(spec.seed));
   Result<std::unique_ptr<PlyWriter>> writer =
       PlyWriter::create(path, options, counts.vertices, counts.triangles);
   if (!writer.ok()) return writer.status();
@@ -187,9 +191,12 @@ Result<std::uint64_t> parse_triangle_count(std::string_view text) {
     return usage_error("not a triangle count: " + quoted + " (expected e.g. 200000, 2e5, 20M)");
   const std::string_view suffix(end, static_cast<std::size_t>(text.data() + text.size() - end));
   double scale = 1;
-  if (suffix == "K" || suffix == "k") scale = 1e3;
-  else if (suffix == "M" || suffix == "m") scale = 1e6;
-  else if (suffix == "G" || suffix == "g") scale = 1e9;
+  if (suffix == "K" || suffix == "k")
+    scale = 1e3;
+  else if (suffix == "M" || suffix == "m")
+    scale = 1e6;
+  else if (suffix == "G" || suffix == "g")
+    scale = 1e9;
   else if (!suffix.empty())
     return usage_error("unknown suffix in triangle count " + quoted + " (use K, M or G)");
   const double count = std::floor(value * scale + 0.5);
@@ -206,9 +213,12 @@ Result<VertexLayout> parse_attributes(std::string_view text) {
   while (begin <= text.size()) {
     const std::size_t comma = std::min(text.find(',', begin), text.size());
     const std::string_view name = text.substr(begin, comma - begin);
-    if (name == "normal") layout.normal = true;
-    else if (name == "color" || name == "colour") layout.color = true;
-    else if (name == "uv") layout.uv = true;
+    if (name == "normal")
+      layout.normal = true;
+    else if (name == "color" || name == "colour")
+      layout.color = true;
+    else if (name == "uv")
+      layout.uv = true;
     else
       return usage_error("unknown attribute '" + std::string(name) + "' in '" + std::string(text) +
                          "' (expected a comma-separated subset of normal,color,uv)");

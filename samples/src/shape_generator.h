@@ -23,7 +23,8 @@ class ShapeGenerator {
   virtual void next_triangles(std::size_t count, std::uint32_t* out) = 0;
 };
 
-// Construction is cheap (no generation): O(sqrt(N)) for the rock's ring table, O(1) otherwise.
+// Construction is cheap (no generation): O(sqrt(N)) for the rock's ring table and the terrain's
+// grid search, O(1) for the city.
 // spec.triangles is already within [kMinTriangles, kMaxTriangles].
 std::unique_ptr<ShapeGenerator> make_rock(const SampleSpec& spec);
 std::unique_ptr<ShapeGenerator> make_terrain(const SampleSpec& spec);

@@ -48,7 +48,8 @@ Grid grid_for(std::uint64_t triangles) {
 class TerrainGenerator final : public ShapeGenerator {
  public:
   explicit TerrainGenerator(const SampleSpec& spec)
-      : layout_(spec.layout), grid_(grid_for(spec.triangles)),
+      : layout_(spec.layout),
+        grid_(grid_for(spec.triangles)),
         spacing_(kWidth / static_cast<double>(grid_.columns)),
         height_(resolvable_octaves(1.0 / kFrequency, spacing_, kSamplesPerCell), spec.seed,
                 kHeightTag) {}
@@ -110,14 +111,18 @@ class TerrainGenerator final : public ShapeGenerator {
 
     // Height ramp: sand, grass, forest, rock, snow; steep ground shows rock whatever its height.
     const double t = clamp01(0.5 + shaped * 0.8);
-    constexpr double kStops[5][3] = {{0.76, 0.70, 0.50}, {0.35, 0.55, 0.22}, {0.18, 0.36, 0.16},
-                                     {0.45, 0.42, 0.40}, {0.95, 0.95, 0.97}};
+    constexpr double kStops[5][3] = {{0.76, 0.70, 0.50},
+                                     {0.35, 0.55, 0.22},
+                                     {0.18, 0.36, 0.16},
+                                     {0.45, 0.42, 0.40},
+                                     {0.95, 0.95, 0.97}};
     const double position = t * 4.0;
     const int stop = std::min(3, static_cast<int>(position));
     const double within = position - stop;
     const double steep = clamp01((1.0 - v.normal[1] - 0.15) * 4.0);
     for (int a = 0; a < 3; ++a)
-      v.color[a] = clamp01(mix(mix(kStops[stop][a], kStops[stop + 1][a], within), kStops[3][a], steep));
+      v.color[a] =
+          clamp01(mix(mix(kStops[stop][a], kStops[stop + 1][a], within), kStops[3][a], steep));
 
     v.uv[0] = x / kWidth;
     v.uv[1] = z / kWidth;

@@ -34,7 +34,8 @@ inline double hash_unit(std::uint32_t seed, std::uint32_t a, std::uint32_t b = 0
 
 // Lattice values in [-1, 1], hashed one axis at a time (z, then y, then x) so that the corners
 // of a cell share the inner hashes: 6 hashes per 2D cell, 14 per 3D cell instead of 12 and 24.
-inline std::uint32_t lattice_hash(std::uint32_t inner, std::int32_t coordinate, std::uint32_t prime) {
+inline std::uint32_t lattice_hash(std::uint32_t inner, std::int32_t coordinate,
+                                  std::uint32_t prime) {
   return hash32(static_cast<std::uint32_t>(coordinate) * prime ^ inner);
 }
 inline double lattice_value(std::uint32_t hash) {
@@ -109,7 +110,8 @@ class Fbm {
 
   Fbm(int octaves, std::uint64_t seed, std::uint32_t tag) : octaves_(octaves) {
     assert(octaves >= 1 && octaves <= kMaxOctaves && "Fbm: 1..kMaxOctaves octaves");
-    for (int o = 0; o < octaves; ++o) seeds_[o] = derive_seed(seed, tag + static_cast<std::uint32_t>(o));
+    for (int o = 0; o < octaves; ++o)
+      seeds_[o] = derive_seed(seed, tag + static_cast<std::uint32_t>(o));
   }
 
   Noise2 operator()(double x, double y) const {

@@ -65,8 +65,9 @@ struct SampleCounts {
   friend bool operator==(const SampleCounts&, const SampleCounts&) = default;
 };
 
-// The exact counts the stream for `spec` emits, without generating anything (O(sqrt(N)) for the
-// rock, O(1) otherwise). usage error when spec.triangles is outside [kMinTriangles, kMaxTriangles].
+// The exact counts the stream for `spec` emits, without generating anything (O(sqrt(N)) time,
+// O(sqrt(N)) memory for the rock's ring table: under 1 ms even for a billion triangles).
+// usage error when spec.triangles is outside [kMinTriangles, kMaxTriangles].
 Result<SampleCounts> sample_counts(const SampleSpec& spec);
 
 struct SampleBatch {
@@ -103,9 +104,8 @@ class SampleStream {
   const SampleCounts& counts() const;
   SampleBatch next();
 
-  class Impl;
-
  private:
+  class Impl;
   explicit SampleStream(std::unique_ptr<Impl> impl);
   std::unique_ptr<Impl> impl_;
 };
