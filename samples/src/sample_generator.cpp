@@ -1,13 +1,16 @@
-// SampleStream: batches a shape generator's sequential output (see shape_generator.h) into a
-// fixed buffer, and write_sample_ply() pipes it into a PlyWriter, so any triangle count streams
-// in about SampleStreamOptions::batch_bytes of memory.
+// SampleStream: batches a shape generator's output (see shape_generator.h) into a fixed buffer,
+// and write_sample_ply() pipes it into a PlyWriter running on a thread of its own, so any
+// triangle count streams in a few batches' worth of memory while generation and encoding overlap.
 #include "octolod/samplegen/sample_generator.h"
 
 #include <algorithm>
+#include <atomic>
 #include <charconv>
+#include <condition_variable>
 #include <cmath>
 #include <cstdint>
 #include <memory>
+#include <mutex>
 #include <string>
 #include <thread>
 #include <utility>
@@ -101,20 +104,26 @@ class SampleStream::Impl {
   const SampleCounts& counts() const { return counts_; }
 
  private:
-  // Vertices [vertices_done_, + count) into the buffer, split over threads_ when worth it.
+  // Vertices [vertices_done_, + count) into the buffer. With threads_ > 1 the range is cut into
+  // fixed chunks that threads claim one at a time, so a thread slowed down by others (the
+  // background writer) does not hold the batch up; each chunk's bytes do not depend on who
+  // computes it.
   void generate_vertices(std::size_t count) {
-    constexpr std::size_t kMinPerThread = 2048;  // below this, a thread costs more than it saves
-    const std::size_t parts = std::clamp<std::size_t>(count / kMinPerThread, 1, threads_);
+    constexpr std::size_t kChunk = 1024;  // vertices: ~0.1-0.5 ms of work, far above thread costs
+    const std::size_t chunks = (count + kChunk - 1) / kChunk;
     const std::size_t floats = spec_.layout.floats();
-    std::vector<std::jthread> helpers;
-    for (std::size_t p = 1; p < parts; ++p) {
-      const std::size_t begin = count * p / parts, end = count * (p + 1) / parts;
-      helpers.emplace_back([this, begin, end, floats] {
+    std::atomic<std::size_t> next_chunk{0};
+    auto work = [&] {
+      for (std::size_t c; (c = next_chunk.fetch_add(1)) < chunks;) {
+        const std::size_t begin = c * kChunk, end = std::min(count, begin + kChunk);
         generator_->vertices(vertices_done_ + begin, end - begin,
                              vertex_buffer_.data() + begin * floats);
-      });
-    }
-    generator_->vertices(vertices_done_, count / parts, vertex_buffer_.data());
+      }
+    };
+    std::vector<std::jthread> helpers;
+    for (std::size_t t = 1; t < std::min<std::size_t>(threads_, chunks); ++t)
+      helpers.emplace_back(work);
+    work();
   }
 
   SampleSpec spec_;
@@ -141,6 +150,82 @@ const SampleSpec& SampleStream::spec() const { return impl_->spec(); }
 const SampleCounts& SampleStream::counts() const { return impl_->counts(); }
 SampleBatch SampleStream::next() { return impl_->next(); }
 
+namespace {
+
+// A batch the pipeline owns: the stream's batch is only valid until its next().
+struct OwnedBatch {
+  SampleBatch::Kind kind = SampleBatch::Kind::end;
+  std::vector<float> vertices;
+  std::vector<std::uint32_t> triangles;
+};
+
+// Writes batches on a thread of its own while the caller generates the next one, through a
+// one-slot mailbox; buffers circulate by swapping, so three batches exist at most.
+class BackgroundWriter {
+ public:
+  explicit BackgroundWriter(PlyWriter& writer) : writer_(writer), thread_([this] { run(); }) {}
+  ~BackgroundWriter() { (void)close(); }
+  BackgroundWriter(const BackgroundWriter&) = delete;
+  BackgroundWriter& operator=(const BackgroundWriter&) = delete;
+
+  // Hands `batch` over and leaves a spent buffer in its place; false once a write failed.
+  bool put(OwnedBatch& batch) {
+    std::unique_lock lock(mutex_);
+    changed_.wait(lock, [&] { return !full_ || !failure_.ok(); });
+    if (!failure_.ok()) return false;
+    std::swap(slot_, batch);
+    full_ = true;
+    changed_.notify_all();
+    return true;
+  }
+
+  // Waits until everything handed over is written; the first write error, if any.
+  Status close() {
+    {
+      std::lock_guard lock(mutex_);
+      closed_ = true;
+      changed_.notify_all();
+    }
+    if (thread_.joinable()) thread_.join();
+    return failure_;
+  }
+
+ private:
+  void run() {
+    OwnedBatch work;
+    for (;;) {
+      {
+        std::unique_lock lock(mutex_);
+        changed_.wait(lock, [&] { return full_ || closed_; });
+        if (!full_) return;  // closed and drained
+        std::swap(slot_, work);
+        full_ = false;
+        changed_.notify_all();
+      }
+      const Status status = work.kind == SampleBatch::Kind::vertices
+                                ? writer_.write_vertices(work.vertices)
+                                : writer_.write_triangles(work.triangles);
+      if (!status.ok()) {
+        std::lock_guard lock(mutex_);
+        failure_ = status;
+        changed_.notify_all();
+        return;
+      }
+    }
+  }
+
+  PlyWriter& writer_;
+  std::mutex mutex_;
+  std::condition_variable changed_;
+  OwnedBatch slot_;
+  bool full_ = false;
+  bool closed_ = false;
+  Status failure_;
+  std::thread thread_;  // last: starts after everything it uses exists
+};
+
+}  // namespace
+
 Status write_sample_ply(const SampleSpec& spec, const std::filesystem::path& path, PlyFormat format,
                         const SampleProgress& progress, const SampleStreamOptions& stream_options) {
   Result<std::unique_ptr<SampleStream>> stream = SampleStream::create(spec, stream_options);
@@ -163,17 +248,18 @@ Status write_sample_ply(const SampleSpec& spec, const std::filesystem::path& pat
 
   const std::uint64_t total = counts.vertices + counts.triangles;
   std::uint64_t done = 0;
+  BackgroundWriter background(*writer.value());
+  OwnedBatch owned;
   for (SampleBatch batch = stream.value()->next(); batch.kind != SampleBatch::Kind::end;
        batch = stream.value()->next()) {
-    if (batch.kind == SampleBatch::Kind::vertices) {
-      OCTOLOD_RETURN_IF_ERROR(writer.value()->write_vertices(batch.vertices));
-      done += batch.vertices.size() / spec.layout.floats();
-    } else {
-      OCTOLOD_RETURN_IF_ERROR(writer.value()->write_triangles(batch.triangles));
-      done += batch.triangles.size() / 3;
-    }
+    owned.kind = batch.kind;
+    owned.vertices.assign(batch.vertices.begin(), batch.vertices.end());
+    owned.triangles.assign(batch.triangles.begin(), batch.triangles.end());
+    if (!background.put(owned)) break;  // close() reports the error
+    done += batch.vertices.size() / spec.layout.floats() + batch.triangles.size() / 3;
     if (progress) progress(done, total);
   }
+  OCTOLOD_RETURN_IF_ERROR(background.close());
   return writer.value()->finish();
 }
 

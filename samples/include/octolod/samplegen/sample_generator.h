@@ -86,8 +86,8 @@ struct SampleStreamOptions {
   // Upper bound on one batch's data: memory use is about this, whatever the triangle count.
   // Larger batches mean fewer calls. Minimum 4 KiB.
   std::size_t batch_bytes = std::size_t{1} << 20;
-  // Threads generating each vertex batch (split into contiguous ranges; the calling thread does
-  // the first). The output is bit-identical for any value; 0 is taken as 1.
+  // Threads generating each vertex batch (the calling thread and threads - 1 helpers claiming
+  // fixed 1024-vertex chunks). The output is bit-identical for any value; 0 is taken as 1.
   unsigned threads = 1;
 };
 
@@ -113,7 +113,9 @@ class SampleStream {
 // Called with the vertices + triangles emitted so far and their total, after every batch.
 using SampleProgress = std::function<void(std::uint64_t done, std::uint64_t total)>;
 
-// Streams the sample into a PLY file (uchar colours; the header's comment names the spec).
+// Streams the sample into a PLY file (uchar colours; the header's comment is the `octolod sample`
+// command that reproduces it). Encoding and writing run on a thread of their own, overlapping
+// generation; memory stays at a few batches. `progress` is called on the calling thread.
 // The file appears only when complete (PlyWriter's temporary + rename). I/O errors name the file.
 Status write_sample_ply(const SampleSpec& spec, const std::filesystem::path& path,
                         PlyFormat format = PlyFormat::binary_little_endian,
