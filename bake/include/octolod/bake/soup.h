@@ -1,0 +1,137 @@
+// The triangle soup stage of the baker (seed 3.3, 4.2, Table 4.1): a PLY file of shared
+// vertices and indexed faces becomes a file with one self-contained record per triangle, so
+// later stages (octree build, clustering) never need random access to the vertices.
+//
+// Out of core (the vertices do not fit in half the budget), as in the seed:
+//   split        the PLY is streamed in portions into a vertex file (records in file order) and
+//                triangle index records (3 vertex ids + triangle id), fed straight into
+//   3 passes     for corner i = 0, 1, 2: external merge sort of the triangle records by corner
+//                i's vertex id, the vertex file scanned in order alongside, the vertex record
+//                written into corner i (the sorted stream of one pass feeds the next pass's sort
+//                directly, no intermediate file).
+// In core (the vertices fit in half the budget): the vertices are kept in memory and the
+// triangle records, sorted into the same output order, take all three corners from memory.
+// Both paths write the same bytes for the same input and SoupOptions::order, whatever the
+// budget and thread count.
+//
+// The soup file (a temporary: raw native little-endian records, no header) holds
+// triangle_count records of soup_record_bytes(layout) bytes:
+//   corner 0: layout.floats() floats, corner 1: same, corner 2: same, triangle id: u32
+// Corners are in the original winding; floats are the PLY's values in VertexLayout order
+// (model units, colours 0..1); the triangle id is the triangle's index in the PLY's stream of
+// triangles (polygons fan-triangulated). Degenerate triangles (a repeated vertex id, or
+// coincident positions) are kept: the clustering stage drops them.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <cstring>
+#include <filesystem>
+#include <functional>
+#include <span>
+#include <string_view>
+#include <vector>
+
+#include "octolod/bake/external_sort.h"
+#include "octolod/bake/temp_file.h"
+#include "octolod/formats/bounds.h"
+#include "octolod/formats/status.h"
+#include "octolod/formats/vertex_layout.h"
+
+namespace octolod::bake {
+
+// Index of a vertex in the PLY's vertex element (0-based).
+enum class VertexId : std::uint32_t {};
+// Index of a triangle in the PLY's stream of triangles after fan triangulation (0-based).
+enum class TriangleId : std::uint32_t {};
+
+// One record of the triangle index file: 16 bytes, native little-endian.
+struct TriangleRecord {
+  VertexId corner[3];
+  TriangleId triangle;
+};
+static_assert(sizeof(TriangleRecord) == 16);
+
+// Bytes of one soup record.
+constexpr std::size_t soup_record_bytes(VertexLayout layout) { return 3 * layout.bytes() + 4; }
+// Byte offset of corner c (0..2) within a soup record.
+constexpr std::size_t soup_corner_offset(VertexLayout layout, int corner) {
+  return static_cast<std::size_t>(corner) * layout.bytes();
+}
+// Byte offset of the triangle id within a soup record.
+constexpr std::size_t soup_triangle_id_offset(VertexLayout layout) { return 3 * layout.bytes(); }
+
+// Copies corner c's layout.floats() floats out of a soup record.
+inline void load_soup_corner(const std::byte* record, VertexLayout layout, int corner, float* out) {
+  std::memcpy(out, record + soup_corner_offset(layout, corner), layout.bytes());
+}
+inline TriangleId load_soup_triangle_id(const std::byte* record, VertexLayout layout) {
+  std::uint32_t id;
+  std::memcpy(&id, record + soup_triangle_id_offset(layout), sizeof id);
+  return TriangleId{id};
+}
+
+enum class SoupOrder {
+  // Ascending vertex id of corner 2, then ascending triangle id: what the last dereference pass
+  // produces anyway. The fastest; use it when a later stage sorts the soup again (the octree).
+  by_last_corner,
+  // Ascending triangle id: the PLY's triangle order. Costs one more external sort of the soup.
+  by_triangle,
+};
+
+// Called from the calling thread as the stage advances: stage is "split", "dereference 0..2"
+// or "order"; `done` of `total` items (vertices + triangles for the split, triangles after).
+using SoupProgressFn =
+    std::function<void(std::string_view stage, std::uint64_t done, std::uint64_t total)>;
+
+struct SoupOptions {
+  // Cap on all buffers of the stage together: PLY reader, file buffers, sorts, and in core the
+  // vertex array. Must be at least kMinSoupBudget. Larger budgets mean fewer sorted runs and,
+  // once the vertices fit in half of it, the in-core path.
+  std::uint64_t memory_budget_bytes = std::uint64_t{64} << 20;
+  // Where the temporary files go (vertex file, sorted runs, the soup); the system temporary
+  // directory when empty. Must exist.
+  std::filesystem::path work_dir;
+  // Threads for sorting runs (1 or 2 are useful); the output does not depend on it.
+  unsigned threads = 2;
+  SoupOrder order = SoupOrder::by_last_corner;
+  // Take the out-of-core three-pass path even when the vertices would fit (tests, benchmarks).
+  bool force_out_of_core = false;
+  SoupProgressFn progress;
+};
+
+inline constexpr std::uint64_t kMinSoupBudget = 256 * 1024;
+
+struct SoupStageSeconds {
+  double split = 0;        // reading the PLY, writing the vertex file (wall, sorting excluded)
+  double sort = 0;         // inside the external sorts (run formation and merging)
+  double dereference = 0;  // scanning vertices and writing corners (sorting excluded)
+  double total = 0;        // wall time of build_soup
+};
+
+struct SoupResult {
+  TempFile soup;  // the soup file; removed when this result is destroyed unless released
+  VertexLayout layout;
+  std::uint64_t vertex_count = 0;
+  std::uint64_t triangle_count = 0;
+  Bounds bounds;         // of every vertex in the file (unreferenced ones included), model units
+  bool in_core = false;  // which path was taken
+  SoupStageSeconds seconds;
+  std::vector<SortStats> sorts;  // one per external sort, in the order they ran
+};
+
+// Builds the soup of `ply` (see the top of this file). Errors: the PLY reader's (bad_input,
+// unsupported, io, naming the file), io naming the temporary file the system refused
+// (including out of space), usage for a budget under kMinSoupBudget or a missing work_dir,
+// unsupported for 2^32 triangles or more. On error no temporary file is left behind.
+Result<SoupResult> build_soup(const std::filesystem::path& ply, const SoupOptions& options);
+
+// The soup of a mesh held in memory, as build_soup would write it for the same vertices
+// (layout.floats() per vertex), triangles (3 vertex ids each, every one < vertex count) and
+// order: triangle_count * soup_record_bytes(layout) bytes. For tests and small meshes.
+std::vector<std::byte> dereference_in_memory(std::span<const float> vertices,
+                                             std::span<const std::uint32_t> triangles,
+                                             VertexLayout layout,
+                                             SoupOrder order = SoupOrder::by_last_corner);
+
+}  // namespace octolod::bake

@@ -1,0 +1,555 @@
+// External k-way merge sort of fixed-size records (seed 3.3, 4.2.2). Runs are sorted with a
+// stable LSD radix sort on 64-bit keys (one histogram pass, digits that do not vary skipped,
+// already-sorted runs detected), merged with a loser tree whose ties go to the earlier run.
+#include "octolod/bake/external_sort.h"
+
+#include <algorithm>
+#include <array>
+#include <cassert>
+#include <chrono>
+#include <cstring>
+#include <limits>
+#include <string>
+#include <thread>
+#include <utility>
+#include <vector>
+
+#include "octolod/bake/temp_file.h"
+#include "record_file.h"
+
+namespace octolod::bake {
+namespace {
+
+constexpr std::uint64_t kMinBudget = 16 * 1024;
+constexpr std::size_t kMinBlockBytes = 4096;
+// Below this many records a run is sorted on one thread (a thread costs more than it saves).
+constexpr std::size_t kParallelSortMin = 1 << 16;
+// Bytes per record of the run buffer's key and order arrays (keys + order, each twice).
+constexpr std::size_t kRunOverhead = 2 * (sizeof(std::uint64_t) + sizeof(std::uint32_t));
+
+class Stopwatch {
+ public:
+  explicit Stopwatch(double& total) : total_(total), start_(std::chrono::steady_clock::now()) {}
+  ~Stopwatch() {
+    total_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+  }
+  Stopwatch(const Stopwatch&) = delete;
+  Stopwatch& operator=(const Stopwatch&) = delete;
+
+ private:
+  double& total_;
+  std::chrono::steady_clock::time_point start_;
+};
+
+// Stable LSD radix sort of `order` by `keys` (parallel arrays of n). Scratch arrays of n
+// entries; the sorted result ends in keys/order (pointers may be swapped with the scratch).
+void radix_sort(std::uint64_t*& keys, std::uint32_t*& order, std::uint64_t*& keys_tmp,
+                std::uint32_t*& order_tmp, std::size_t n) {
+  if (n < 2) return;
+  bool sorted = true;
+  for (std::size_t i = 1; i < n && sorted; ++i) sorted = keys[i - 1] <= keys[i];
+  if (sorted) return;
+
+  std::vector<std::array<std::uint32_t, 256>> counts(8, std::array<std::uint32_t, 256>{});
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::uint64_t k = keys[i];
+    for (int d = 0; d < 8; ++d) ++counts[static_cast<std::size_t>(d)][(k >> (8 * d)) & 255u];
+  }
+  for (int d = 0; d < 8; ++d) {
+    auto& count = counts[static_cast<std::size_t>(d)];
+    const int shift = 8 * d;
+    if (count[(keys[0] >> shift) & 255u] == n) continue;  // this digit is the same everywhere
+    std::uint32_t offset = 0;
+    for (auto& c : count) {
+      const std::uint32_t next = offset + c;
+      c = offset;
+      offset = next;
+    }
+    for (std::size_t i = 0; i < n; ++i) {
+      const std::uint64_t k = keys[i];
+      const std::uint32_t pos = count[(k >> shift) & 255u]++;
+      keys_tmp[pos] = k;
+      order_tmp[pos] = order[i];
+    }
+    std::swap(keys, keys_tmp);
+    std::swap(order, order_tmp);
+  }
+}
+
+// The records of one sorted run in memory: the run buffer, the keys and the sorted order, as
+// one or two sorted halves (two threads) read out by a two-way merge.
+struct RunBuffer {
+  std::size_t record_bytes = 0;
+  std::size_t capacity = 0;  // records
+  std::size_t count = 0;     // records held
+  std::unique_ptr<std::byte[]> records;
+  std::unique_ptr<std::uint64_t[]> key_storage;    // 2 * capacity
+  std::unique_ptr<std::uint32_t[]> order_storage;  // 2 * capacity
+  // Sorted halves [0, half) and [half, count) after sort(): keys and record indices.
+  std::uint64_t* keys[2] = {nullptr, nullptr};
+  std::uint32_t* order[2] = {nullptr, nullptr};
+  std::size_t size[2] = {0, 0};
+  std::size_t cursor[2] = {0, 0};  // read position in each half
+
+  void allocate(std::size_t rb, std::size_t cap) {
+    record_bytes = rb;
+    capacity = cap;
+    records = std::make_unique_for_overwrite<std::byte[]>(cap * rb);
+    key_storage = std::make_unique_for_overwrite<std::uint64_t[]>(2 * cap);
+    order_storage = std::make_unique_for_overwrite<std::uint32_t[]>(2 * cap);
+  }
+  void release() {
+    records.reset();
+    key_storage.reset();
+    order_storage.reset();
+    capacity = count = 0;
+  }
+
+  void sort(const SortKeyFn& key_fn, unsigned threads) {
+    size[0] = size[1] = cursor[0] = cursor[1] = 0;
+    if (count == 0) return;
+    std::uint64_t* k = key_storage.get();
+    std::uint32_t* o = order_storage.get();
+    key_fn(std::span<const std::byte>(records.get(), count * record_bytes),
+           std::span<std::uint64_t>(k, count));
+    for (std::size_t i = 0; i < count; ++i) o[i] = static_cast<std::uint32_t>(i);
+    const std::size_t half = (threads >= 2 && count >= kParallelSortMin) ? count / 2 : count;
+    size[0] = half;
+    size[1] = count - half;
+    cursor[0] = cursor[1] = 0;
+    std::uint64_t* kt = k + capacity;
+    std::uint32_t* ot = o + capacity;
+    keys[0] = k;
+    order[0] = o;
+    keys[1] = k + half;
+    order[1] = o + half;
+    std::uint64_t* kt1 = kt + half;
+    std::uint32_t* ot1 = ot + half;
+    if (size[1] == 0) {
+      radix_sort(keys[0], order[0], kt, ot, size[0]);
+      return;
+    }
+    std::thread helper([&] { radix_sort(keys[1], order[1], kt1, ot1, size[1]); });
+    radix_sort(keys[0], order[0], kt, ot, size[0]);
+    helper.join();
+  }
+
+  bool exhausted() const { return cursor[0] == size[0] && cursor[1] == size[1]; }
+
+  // Copies up to `max` records in sorted order to `out`; returns how many. Ties between the
+  // halves go to the first half (earlier input), which keeps the sort stable.
+  std::size_t emit(std::byte* out, std::size_t max) {
+    std::size_t n = 0;
+    const std::byte* base = records.get();
+    while (n < max) {
+      int h;
+      if (cursor[0] == size[0]) {
+        if (cursor[1] == size[1]) break;
+        h = 1;
+      } else if (cursor[1] == size[1]) {
+        h = 0;
+      } else {
+        h = keys[1][cursor[1]] < keys[0][cursor[0]] ? 1 : 0;
+      }
+      std::memcpy(out + n * record_bytes,
+                  base + std::size_t{order[h][cursor[h]]} * record_bytes, record_bytes);
+      ++cursor[h];
+      ++n;
+    }
+    return n;
+  }
+};
+
+// One run being merged: its file, a block of its records and their keys.
+struct MergeInput {
+  TempFile file;
+  std::unique_ptr<RecordReader> reader;
+  std::vector<std::uint64_t> keys;
+  const std::byte* records = nullptr;
+  std::size_t count = 0;  // records in the current block
+  std::size_t pos = 0;
+  bool done = false;
+};
+
+// Loser-tree k-way merge of runs (Knuth 5.4.1). Ties go to the input with the lower index, the
+// earlier run, so the merge is stable.
+class KWayMerge {
+ public:
+  Status open(std::vector<TempFile> runs, std::size_t record_bytes, std::size_t block_bytes,
+              const SortKeyFn* key_fn, SortStats* stats) {
+    record_bytes_ = record_bytes;
+    key_fn_ = key_fn;
+    stats_ = stats;
+    const std::size_t k = runs.size();
+    inputs_.resize(k);
+    for (std::size_t i = 0; i < k; ++i) {
+      MergeInput& in = inputs_[i];
+      in.file = std::move(runs[i]);
+      auto reader = RecordReader::open(in.file.path(), record_bytes, block_bytes);
+      if (!reader.ok()) return reader.status();
+      in.reader = std::make_unique<RecordReader>(std::move(reader).value());
+      in.keys.resize(std::max<std::size_t>(1, block_bytes / record_bytes));
+      OCTOLOD_RETURN_IF_ERROR(refill(in));
+    }
+    // Build the tree bottom-up: winners of each subtree, losers stored in the nodes.
+    tree_.assign(std::max<std::size_t>(k, 1), 0);
+    if (k > 1) {
+      std::vector<std::uint32_t> winner(2 * k);
+      for (std::size_t i = 0; i < k; ++i) winner[k + i] = static_cast<std::uint32_t>(i);
+      for (std::size_t node = k - 1; node >= 1; --node) {
+        const std::uint32_t a = winner[2 * node];
+        const std::uint32_t b = winner[2 * node + 1];
+        if (less(a, b)) {
+          winner[node] = a;
+          tree_[node] = b;
+        } else {
+          winner[node] = b;
+          tree_[node] = a;
+        }
+      }
+      tree_[0] = winner[1];
+    }
+    return {};
+  }
+
+  bool empty() const { return inputs_.empty() || inputs_[tree_[0]].done; }
+
+  // Copies up to `max` records in order to `out`; returns how many (0 only when exhausted).
+  Result<std::size_t> emit(std::byte* out, std::size_t max) {
+    std::size_t n = 0;
+    const std::size_t k = inputs_.size();
+    while (n < max) {
+      std::uint32_t w = tree_[0];
+      MergeInput& in = inputs_[w];
+      if (in.done) break;
+      std::memcpy(out + n * record_bytes_, in.records + in.pos * record_bytes_, record_bytes_);
+      ++n;
+      if (++in.pos == in.count) OCTOLOD_RETURN_IF_ERROR(refill(in));
+      // Replay w's path to the root.
+      for (std::size_t node = (w + k) / 2; node >= 1; node /= 2) {
+        if (less(tree_[node], w)) std::swap(tree_[node], w);
+      }
+      tree_[0] = w;
+    }
+    return n;
+  }
+
+ private:
+  bool less(std::uint32_t a, std::uint32_t b) const {
+    const MergeInput& x = inputs_[a];
+    const MergeInput& y = inputs_[b];
+    if (x.done) return false;
+    if (y.done) return true;
+    const std::uint64_t ka = x.keys[x.pos];
+    const std::uint64_t kb = y.keys[y.pos];
+    return ka < kb || (ka == kb && a < b);
+  }
+
+  Status refill(MergeInput& in) {
+    auto block = in.reader->read(in.keys.size());
+    if (!block.ok()) return block.status();
+    const std::size_t n = block->size() / record_bytes_;
+    if (n == 0) {
+      // Consumed: free the buffer and delete the run file right away.
+      in.done = true;
+      in.reader.reset();
+      in.file.remove();
+      in.keys = {};
+      return {};
+    }
+    stats_->bytes_read += block->size();
+    in.records = block->data();
+    in.count = n;
+    in.pos = 0;
+    (*key_fn_)(block.value(), std::span<std::uint64_t>(in.keys.data(), n));
+    return {};
+  }
+
+  std::size_t record_bytes_ = 0;
+  const SortKeyFn* key_fn_ = nullptr;
+  SortStats* stats_ = nullptr;
+  std::vector<MergeInput> inputs_;
+  std::vector<std::uint32_t> tree_;  // [0] winner, [1..k) losers
+};
+
+class ExternalSorter final : public RecordSorter {
+ public:
+  ExternalSorter(std::size_t record_bytes, SortKeyFn key, const SortOptions& options,
+                 std::size_t out_bytes, std::size_t run_capacity)
+      : record_bytes_(record_bytes),
+        key_(std::move(key)),
+        options_(options),
+        out_bytes_(out_bytes),
+        run_capacity_(run_capacity) {}
+
+  Status push(std::span<const std::byte> records) override {
+    assert(state_ == State::input && "RecordSorter::push after finish()");
+    assert(records.size() % record_bytes_ == 0 && "RecordSorter::push of a partial record");
+    Stopwatch watch(stats_.seconds);
+    std::size_t n = records.size() / record_bytes_;
+    const std::byte* src = records.data();
+    while (n > 0) {
+      if (!run_.records) run_.allocate(record_bytes_, run_capacity_);
+      if (run_.count == run_.capacity) OCTOLOD_RETURN_IF_ERROR(spill());
+      const std::size_t take = std::min(n, run_.capacity - run_.count);
+      std::memcpy(run_.records.get() + run_.count * record_bytes_, src, take * record_bytes_);
+      run_.count += take;
+      stats_.records += take;
+      src += take * record_bytes_;
+      n -= take;
+    }
+    return {};
+  }
+
+  Status finish() override {
+    assert(state_ == State::input && "RecordSorter::finish called twice");
+    Stopwatch watch(stats_.seconds);
+    out_ = std::make_unique_for_overwrite<std::byte[]>(out_bytes_);
+    if (runs_.empty()) {
+      // In-core fast path: one in-memory sort, no temporary file.
+      stats_.in_core = true;
+      run_.sort(key_, options_.threads);
+      state_ = State::in_core;
+      return {};
+    }
+    if (run_.count > 0) OCTOLOD_RETURN_IF_ERROR(spill());
+    run_.release();
+    OCTOLOD_RETURN_IF_ERROR(merge_down());
+    stats_.fan_in = std::max(stats_.fan_in, static_cast<std::uint32_t>(runs_.size()));
+    ++stats_.merge_passes;
+    const std::size_t block = block_bytes(runs_.size());
+    OCTOLOD_RETURN_IF_ERROR(final_.open(std::move(runs_), record_bytes_, block, &key_, &stats_));
+    runs_.clear();
+    state_ = State::merging;
+    return {};
+  }
+
+  Result<std::span<const std::byte>> next() override {
+    assert(state_ != State::input && "RecordSorter::next before finish()");
+    Stopwatch watch(stats_.seconds);
+    const std::size_t max = out_bytes_ / record_bytes_;
+    std::size_t n = 0;
+    if (state_ == State::in_core) {
+      n = run_.emit(out_.get(), max);
+      if (run_.exhausted()) run_.release();
+    } else {
+      auto emitted = final_.emit(out_.get(), max);
+      if (!emitted.ok()) return emitted.status();
+      n = emitted.value();
+    }
+    return std::span<const std::byte>(out_.get(), n * record_bytes_);
+  }
+
+  const SortStats& stats() const override { return stats_; }
+  std::size_t record_bytes() const override { return record_bytes_; }
+
+ private:
+  enum class State { input, in_core, merging };
+
+  // Sorts the run buffer and writes it to a new run file.
+  Status spill() {
+    run_.sort(key_, options_.threads);
+    TempFile file = make_temp_file(options_.work_dir, "run");
+    auto writer = RecordWriter::create(file.path(), record_bytes_, out_bytes_);
+    if (!writer.ok()) return writer.status();
+    while (!run_.exhausted()) {
+      auto space = writer->reserve(SIZE_MAX);
+      if (!space.ok()) return space.status();
+      writer->commit(run_.emit(space->data(), space->size() / record_bytes_));
+    }
+    OCTOLOD_RETURN_IF_ERROR(writer->finish());
+    stats_.bytes_written += run_.count * record_bytes_;
+    ++stats_.runs;
+    runs_.push_back(std::move(file));
+    run_.count = 0;
+    return {};
+  }
+
+  // Memory left for merge inputs once the output buffer is taken.
+  std::size_t merge_bytes() const {
+    return static_cast<std::size_t>(options_.memory_budget_bytes) - out_bytes_;
+  }
+  // Bytes one merge input costs per byte of block: the block plus its keys.
+  std::size_t input_cost(std::size_t block) const {
+    return block + block / record_bytes_ * sizeof(std::uint64_t);
+  }
+  std::size_t min_block() const {
+    return std::max<std::size_t>(1, kMinBlockBytes / record_bytes_) * record_bytes_;
+  }
+  std::size_t max_fan_in() const { return merge_bytes() / input_cost(min_block()); }
+  // The largest block (whole records, at most max_io_buffer_bytes) for merging `k` runs.
+  std::size_t block_bytes(std::size_t k) const {
+    const std::size_t per_input = merge_bytes() / std::max<std::size_t>(k, 1);
+    std::size_t records = per_input / (record_bytes_ + sizeof(std::uint64_t));
+    records = std::min(records, std::max<std::size_t>(1, options_.max_io_buffer_bytes / record_bytes_));
+    return std::max<std::size_t>(records, 1) * record_bytes_;
+  }
+
+  // Intermediate passes: merges groups of consecutive runs (so ties keep their input order)
+  // until the final merge can take all remaining runs at once. Each group is as large as the
+  // fan-in allows but no larger than needed to reach that count.
+  Status merge_down() {
+    const std::size_t k = max_fan_in();
+    assert(k >= 2 && "the budget check in create() guarantees a fan-in of two");
+    std::size_t pos = 0;
+    while (runs_.size() > k) {
+      if (pos == 0) ++stats_.merge_passes;
+      const std::size_t group = std::min({k, runs_.size() - k + 1, runs_.size() - pos});
+      if (group < 2) {  // one run left at the end of this pass: start the next pass
+        pos = 0;
+        continue;
+      }
+      std::vector<TempFile> inputs;
+      for (std::size_t i = 0; i < group; ++i) inputs.push_back(std::move(runs_[pos + i]));
+      runs_.erase(runs_.begin() + static_cast<std::ptrdiff_t>(pos),
+                  runs_.begin() + static_cast<std::ptrdiff_t>(pos + group));
+      stats_.fan_in = std::max(stats_.fan_in, static_cast<std::uint32_t>(group));
+      TempFile merged = make_temp_file(options_.work_dir, "run");
+      OCTOLOD_RETURN_IF_ERROR(merge_to_file(std::move(inputs), merged.path()));
+      runs_.insert(runs_.begin() + static_cast<std::ptrdiff_t>(pos), std::move(merged));
+      if (++pos >= runs_.size()) pos = 0;
+    }
+    return {};
+  }
+
+  Status merge_to_file(std::vector<TempFile> inputs, const std::filesystem::path& path) {
+    KWayMerge merge;
+    const std::size_t k = inputs.size();
+    OCTOLOD_RETURN_IF_ERROR(merge.open(std::move(inputs), record_bytes_, block_bytes(k), &key_,
+                                       &stats_));
+    auto writer = RecordWriter::create(path, record_bytes_, out_bytes_);
+    if (!writer.ok()) return writer.status();
+    while (!merge.empty()) {
+      auto space = writer->reserve(SIZE_MAX);
+      if (!space.ok()) return space.status();
+      auto n = merge.emit(space->data(), space->size() / record_bytes_);
+      if (!n.ok()) return n.status();
+      writer->commit(n.value());
+      stats_.bytes_written += n.value() * record_bytes_;
+    }
+    return writer->finish();
+  }
+
+  std::size_t record_bytes_;
+  SortKeyFn key_;
+  SortOptions options_;
+  std::size_t out_bytes_;     // output / run writer buffer
+  std::size_t run_capacity_;  // records per run
+  State state_ = State::input;
+  RunBuffer run_;
+  std::vector<TempFile> runs_;
+  KWayMerge final_;
+  std::unique_ptr<std::byte[]> out_;
+  SortStats stats_;
+};
+
+}  // namespace
+
+SortKeyFn sort_key_u32_at(std::size_t offset, std::size_t record_bytes) {
+  assert(offset + 4 <= record_bytes && "sort key beyond the record");
+  return [offset, record_bytes](std::span<const std::byte> records,
+                                std::span<std::uint64_t> keys) {
+    const std::byte* p = records.data() + offset;
+    for (std::size_t i = 0; i < keys.size(); ++i, p += record_bytes) {
+      std::uint32_t v;
+      std::memcpy(&v, p, sizeof v);
+      keys[i] = v;
+    }
+  };
+}
+
+SortKeyFn sort_key_u64_at(std::size_t offset, std::size_t record_bytes) {
+  assert(offset + 8 <= record_bytes && "sort key beyond the record");
+  return [offset, record_bytes](std::span<const std::byte> records,
+                                std::span<std::uint64_t> keys) {
+    const std::byte* p = records.data() + offset;
+    for (std::size_t i = 0; i < keys.size(); ++i, p += record_bytes) {
+      std::memcpy(&keys[i], p, sizeof(std::uint64_t));
+    }
+  };
+}
+
+Result<std::unique_ptr<RecordSorter>> RecordSorter::create(std::size_t record_bytes,
+                                                           SortKeyFn key,
+                                                           const SortOptions& options) {
+  assert(record_bytes > 0 && key && "RecordSorter needs a record size and a key function");
+  const std::uint64_t budget = options.memory_budget_bytes;
+  const auto too_small = [&] {
+    return usage_error("sort memory budget of " + std::to_string(budget) +
+                       " bytes is too small for " + std::to_string(record_bytes) +
+                       "-byte records");
+  };
+  if (budget < kMinBudget || budget > std::numeric_limits<std::size_t>::max() / 2) {
+    return too_small();
+  }
+  // Output / run writer buffer: an eighth of the budget, within [4 KiB, max_io_buffer_bytes].
+  std::size_t out_bytes = std::clamp<std::size_t>(static_cast<std::size_t>(budget / 8),
+                                                  kMinBlockBytes,
+                                                  std::max(options.max_io_buffer_bytes, kMinBlockBytes));
+  out_bytes = std::max<std::size_t>(1, out_bytes / record_bytes) * record_bytes;
+  if (out_bytes >= budget) return too_small();
+  const std::size_t rest = static_cast<std::size_t>(budget) - out_bytes;
+  const std::size_t run_capacity =
+      std::min<std::size_t>(rest / (record_bytes + kRunOverhead),
+                            std::numeric_limits<std::uint32_t>::max());
+  const std::size_t min_block = std::max<std::size_t>(1, kMinBlockBytes / record_bytes) * record_bytes;
+  const std::size_t fan_in = rest / (min_block + min_block / record_bytes * sizeof(std::uint64_t));
+  if (run_capacity < 2 || fan_in < 2) return too_small();
+  return std::unique_ptr<RecordSorter>(
+      new ExternalSorter(record_bytes, std::move(key), options, out_bytes, run_capacity));
+}
+
+Result<SortStats> sort_records(const std::filesystem::path& in, const std::filesystem::path& out,
+                               std::size_t record_bytes, SortKeyFn key,
+                               const SortOptions& options) {
+  // The input reader and output writer take a sixteenth of the budget each.
+  const std::size_t io = std::clamp<std::size_t>(
+      static_cast<std::size_t>(options.memory_budget_bytes / 16), kMinBlockBytes,
+      std::max(options.max_io_buffer_bytes, kMinBlockBytes));
+  SortOptions sorter_options = options;
+  if (options.memory_budget_bytes <= 2 * io) {
+    return usage_error("sort memory budget of " + std::to_string(options.memory_budget_bytes) +
+                       " bytes is too small");
+  }
+  sorter_options.memory_budget_bytes = options.memory_budget_bytes - 2 * io;
+  auto sorter = RecordSorter::create(record_bytes, std::move(key), sorter_options);
+  if (!sorter.ok()) return sorter.status();
+  RecordSorter& s = *sorter.value();
+  {
+    auto reader = RecordReader::open(in, record_bytes, io);
+    if (!reader.ok()) return reader.status();
+    for (;;) {
+      auto block = reader->read();
+      if (!block.ok()) return block.status();
+      if (block->empty()) break;
+      OCTOLOD_RETURN_IF_ERROR(s.push(block.value()));
+    }
+  }
+  OCTOLOD_RETURN_IF_ERROR(s.finish());
+  auto writer = RecordWriter::create(out, record_bytes, io);
+  if (!writer.ok()) return writer.status();
+  for (;;) {
+    auto block = s.next();
+    if (!block.ok()) {
+      std::error_code ignored;
+      std::filesystem::remove(out, ignored);
+      return block.status();
+    }
+    if (block->empty()) break;
+    Status st = writer->append(block->data(), block->size() / record_bytes);
+    if (!st.ok()) {
+      std::error_code ignored;
+      std::filesystem::remove(out, ignored);
+      return st;
+    }
+  }
+  Status st = writer->finish();
+  if (!st.ok()) {
+    std::error_code ignored;
+    std::filesystem::remove(out, ignored);
+    return st;
+  }
+  return s.stats();
+}
+
+}  // namespace octolod::bake

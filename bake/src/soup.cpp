@@ -1,0 +1,256 @@
+// The triangle soup stage (seed 3.3, 4.2, Table 4.1): split, then three sort + dereference
+// passes out of core, or one sorted gather from the in-memory vertices when they fit. See
+// octolod/bake/soup.h for the contract; this file decides the path and divides the budget.
+#include "octolod/bake/soup.h"
+
+#include <algorithm>
+#include <cstddef>
+#include <chrono>
+#include <memory>
+#include <optional>
+#include <string>
+#include <system_error>
+#include <utility>
+
+#include "dereference.h"
+#include "octolod/formats/ply_reader.h"
+#include "record_file.h"
+#include "split.h"
+
+namespace octolod::bake {
+namespace {
+
+// PlyReader's fixed file buffer on top of PlyReadOptions::buffer_bytes (ply_reader.h).
+constexpr std::uint64_t kPlyFileBuffer = 64 * 1024;
+
+double seconds_since(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+class SoupBuilder {
+ public:
+  SoupBuilder(const SoupOptions& options, std::size_t io_bytes)
+      : options_(options), io_(io_bytes) {}
+
+  Result<SoupResult> run(const std::filesystem::path& ply) {
+    const auto start = std::chrono::steady_clock::now();
+    PlyReadOptions read_options;
+    read_options.buffer_bytes = io_;
+    auto reader = PlyReader::open(ply, read_options);
+    if (!reader.ok()) return reader.status();
+    reader_ = std::move(reader).value();
+    const PlyInfo& info = reader_->info();
+    layout_ = info.layout;
+    split_total_ = info.vertex_count + info.face_count;
+    const std::uint64_t vertex_array_bytes = info.vertex_count * layout_.bytes();
+    const bool in_core =
+        !options_.force_out_of_core && vertex_array_bytes <= options_.memory_budget_bytes / 2;
+    Status status = in_core ? run_in_core(info.vertex_count) : run_out_of_core();
+    if (!status.ok()) return status;
+
+    result_.soup = std::move(soup_file_);
+    result_.layout = layout_;
+    result_.in_core = in_core;
+    result_.seconds.total = seconds_since(start);
+    for (const SortStats& s : result_.sorts) result_.seconds.sort += s.seconds;
+    result_.seconds.split = split_wall_ - split_sort_seconds_;
+    result_.seconds.dereference =
+        std::max(0.0, result_.seconds.total - result_.seconds.split - result_.seconds.sort);
+    return std::move(result_);
+  }
+
+ private:
+  SortOptions sort_options(std::uint64_t budget) const {
+    SortOptions o;
+    o.memory_budget_bytes = budget;
+    o.work_dir = options_.work_dir;
+    o.threads = options_.threads;
+    return o;
+  }
+
+  void progress(std::string_view stage, std::uint64_t done, std::uint64_t total) const {
+    if (options_.progress) options_.progress(stage, std::min(done, total), total);
+  }
+
+  // Runs the split into `sinks` and records the split's wall time and the sort time inside it.
+  Status split(SplitSinks sinks, const RecordSorter& sorter) {
+    const auto start = std::chrono::steady_clock::now();
+    sinks.progress = [this](std::uint64_t done) { progress("split", done, split_total_); };
+    auto split = split_ply(*reader_, io_, sinks);
+    if (!split.ok()) return split.status();
+    reader_.reset();  // frees the PLY buffers before the next phase
+    result_.vertex_count = split->vertex_count;
+    result_.triangle_count = split->triangle_count;
+    result_.bounds = split->bounds;
+    split_wall_ = seconds_since(start);
+    split_sort_seconds_ = sorter.stats().seconds;
+    return {};
+  }
+
+  // Vertices in memory; triangle records sorted into the output order, then gathered.
+  Status run_in_core(std::uint64_t vertex_count) {
+    const std::size_t floats = layout_.floats();
+    const std::uint64_t vertex_array_bytes = vertex_count * layout_.bytes();
+    auto vertices = std::make_unique_for_overwrite<float[]>(vertex_count * floats);
+    // Budget: vertex array, PLY reader, triangle batch, soup writer; the sort gets the rest
+    // (at least 5/16 of the budget minus the reader's file buffer, since the array is <= 1/2).
+    const std::uint64_t sort_budget =
+        options_.memory_budget_bytes - vertex_array_bytes - 3 * io_ - kPlyFileBuffer;
+    auto sorter = RecordSorter::create(
+        sizeof(TriangleRecord),
+        options_.order == SoupOrder::by_last_corner
+            ? last_corner_key(layout_, 0)
+            : sort_key_u32_at(offsetof(TriangleRecord, triangle), sizeof(TriangleRecord)),
+        sort_options(sort_budget));
+    if (!sorter.ok()) return sorter.status();
+    RecordSorter& triangles = *sorter.value();
+
+    SplitSinks sinks;
+    sinks.vertices = [&](std::uint64_t first, std::span<const float> v) {
+      std::copy(v.begin(), v.end(), vertices.get() + first * floats);
+      return Status{};
+    };
+    sinks.triangles = [&](std::span<const TriangleRecord> t) {
+      return triangles.push(std::as_bytes(t));
+    };
+    OCTOLOD_RETURN_IF_ERROR(split(std::move(sinks), triangles));
+    OCTOLOD_RETURN_IF_ERROR(triangles.finish());
+    progress("dereference", 0, result_.triangle_count);
+
+    soup_file_ = make_temp_file(options_.work_dir, "soup");
+    auto soup = RecordWriter::create(soup_file_.path(), soup_record_bytes(layout_), io_);
+    if (!soup.ok()) return soup.status();
+    OCTOLOD_RETURN_IF_ERROR(dereference_in_core(
+        layout_, std::span<const float>(vertices.get(), vertex_count * floats), triangles, soup.value()));
+    OCTOLOD_RETURN_IF_ERROR(soup->finish());
+    progress("dereference", result_.triangle_count, result_.triangle_count);
+    result_.sorts.push_back(triangles.stats());
+    return {};
+  }
+
+  // The seed's three passes, each sorted stream feeding the next pass's sort.
+  Status run_out_of_core() {
+    // Budget: two sorts live at once (one merging, one forming runs) plus two io buffers (the
+    // vertex file reader and the output batch); the split's PLY reader, vertex writer and
+    // triangle batch fit in the half the second sort does not use yet (kMinSoupBudget).
+    const std::uint64_t sort_budget = (options_.memory_budget_bytes - 2 * io_) / 2;
+    TempFile vertex_file = make_temp_file(options_.work_dir, "vertices");
+    auto sorter = RecordSorter::create(
+        sizeof(TriangleRecord), sort_key_u32_at(working_vertex_id_offset(layout_, 0), 16),
+        sort_options(sort_budget));
+    if (!sorter.ok()) return sorter.status();
+    std::unique_ptr<RecordSorter> current = std::move(sorter).value();
+    {
+      auto vertex_writer = RecordWriter::create(vertex_file.path(), layout_.bytes(), io_);
+      if (!vertex_writer.ok()) return vertex_writer.status();
+      SplitSinks sinks;
+      sinks.vertices = [&](std::uint64_t, std::span<const float> v) {
+        return vertex_writer->append(reinterpret_cast<const std::byte*>(v.data()),
+                                     v.size() / layout_.floats());
+      };
+      sinks.triangles = [&](std::span<const TriangleRecord> t) {
+        return current->push(std::as_bytes(t));
+      };
+      OCTOLOD_RETURN_IF_ERROR(split(std::move(sinks), *current));
+      OCTOLOD_RETURN_IF_ERROR(vertex_writer->finish());
+    }
+    OCTOLOD_RETURN_IF_ERROR(current->finish());
+
+    // The soup writer's buffer exists only once the second sort is gone (last pass, or the
+    // by-triangle sort's output).
+    std::optional<RecordWriter> soup;
+    const auto open_soup = [&]() -> Status {
+      soup_file_ = make_temp_file(options_.work_dir, "soup");
+      auto writer = RecordWriter::create(soup_file_.path(), soup_record_bytes(layout_), io_);
+      if (!writer.ok()) return writer.status();
+      soup.emplace(std::move(writer).value());
+      return {};
+    };
+    auto scratch = std::make_unique_for_overwrite<std::byte[]>(io_);
+    static constexpr const char* kPassNames[3] = {"dereference 0", "dereference 1",
+                                                  "dereference 2"};
+    for (int corner = 0; corner < 3; ++corner) {
+      const int filled = corner + 1;
+      // Where this pass's output goes: the next pass's sort, the final order sort, or the soup.
+      std::unique_ptr<RecordSorter> next;
+      const std::size_t out_bytes = working_record_bytes(layout_, filled);
+      SortKeyFn key;
+      if (filled < 2) {
+        key = sort_key_u32_at(working_vertex_id_offset(layout_, filled), out_bytes);
+      } else if (filled == 2) {
+        key = options_.order == SoupOrder::by_last_corner
+                  ? last_corner_key(layout_, 2)
+                  : sort_key_u32_at(working_vertex_id_offset(layout_, 2), out_bytes);
+      } else if (options_.order == SoupOrder::by_triangle) {
+        key = sort_key_u32_at(soup_triangle_id_offset(layout_), out_bytes);
+      }
+      if (!key) OCTOLOD_RETURN_IF_ERROR(open_soup());
+      if (key) {
+        auto created = RecordSorter::create(out_bytes, std::move(key), sort_options(sort_budget));
+        if (!created.ok()) return created.status();
+        next = std::move(created).value();
+      }
+      std::uint64_t done = 0;
+      const char* stage = kPassNames[corner];
+      const RecordSink sink = [&](std::span<const std::byte> records) {
+        done += records.size() / out_bytes;
+        progress(stage, done, result_.triangle_count);
+        if (next) return next->push(records);
+        return soup->append(records.data(), records.size() / out_bytes);
+      };
+      auto vertices = RecordReader::open(vertex_file.path(), layout_.bytes(), io_);
+      if (!vertices.ok()) return vertices.status();
+      OCTOLOD_RETURN_IF_ERROR(dereference_pass(
+          corner, layout_, *current, vertices.value(), std::span<std::byte>(scratch.get(), io_), sink));
+      result_.sorts.push_back(current->stats());
+      current.reset();  // frees its buffers before the next sort merges
+      if (!next) break;
+      OCTOLOD_RETURN_IF_ERROR(next->finish());
+      current = std::move(next);
+    }
+    vertex_file.remove();
+    if (current) {  // SoupOrder::by_triangle: the soup sorted by triangle id
+      OCTOLOD_RETURN_IF_ERROR(open_soup());
+      for (;;) {
+        auto block = current->next();
+        if (!block.ok()) return block.status();
+        if (block->empty()) break;
+        OCTOLOD_RETURN_IF_ERROR(soup->append(block->data(), block->size() / soup->record_bytes()));
+        progress("order", soup->records_written(), result_.triangle_count);
+      }
+      result_.sorts.push_back(current->stats());
+    }
+    return soup->finish();
+  }
+
+  const SoupOptions& options_;
+  const std::size_t io_;  // one file buffer / batch: budget / 16 within [4 KiB, 1 MiB]
+  std::unique_ptr<PlyReader> reader_;
+  VertexLayout layout_;
+  std::uint64_t split_total_ = 0;
+  double split_wall_ = 0;
+  double split_sort_seconds_ = 0;
+  TempFile soup_file_;
+  SoupResult result_;
+};
+
+}  // namespace
+
+Result<SoupResult> build_soup(const std::filesystem::path& ply, const SoupOptions& options) {
+  if (options.memory_budget_bytes < kMinSoupBudget) {
+    return usage_error("soup memory budget of " + std::to_string(options.memory_budget_bytes) +
+                       " bytes is below the minimum of " + std::to_string(kMinSoupBudget));
+  }
+  std::error_code ec;
+  if (!options.work_dir.empty() && !std::filesystem::is_directory(options.work_dir, ec)) {
+    return usage_error("work directory '" + options.work_dir.string() + "' does not exist");
+  }
+  const std::size_t io = std::clamp<std::size_t>(
+      static_cast<std::size_t>(std::min<std::uint64_t>(options.memory_budget_bytes / 16,
+                                                       std::size_t{1} << 20)),
+      4096, std::size_t{1} << 20);
+  SoupBuilder builder(options, io);
+  return builder.run(ply);
+}
+
+}  // namespace octolod::bake

@@ -1,0 +1,48 @@
+// Split (seed 4.2.1): a PLY streamed in portions becomes vertex records (layout.floats() floats
+// each, file order) and triangle index records (TriangleRecord, file order, triangle ids
+// counting from 0), handed to sinks batch by batch. Memory: the reader's buffers plus one
+// batch of triangle records, whatever the file's size. Also computes the bounds of the vertices.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <span>
+
+#include "octolod/bake/soup.h"
+#include "octolod/formats/bounds.h"
+#include "octolod/formats/ply_reader.h"
+#include "octolod/formats/status.h"
+#include "octolod/formats/vertex_layout.h"
+
+namespace octolod::bake {
+
+struct SplitSinks {
+  // Consecutive vertices, layout.floats() floats each; the span is valid during the call only.
+  std::function<Status(std::uint64_t first, std::span<const float> vertices)> vertices;
+  // Consecutive triangles; the span is valid during the call only.
+  std::function<Status(std::span<const TriangleRecord> triangles)> triangles;
+  // Optional: vertices + triangles read so far (triangles counted as their PLY faces' share).
+  std::function<void(std::uint64_t done)> progress;
+};
+
+struct SplitResult {
+  VertexLayout layout;
+  std::uint64_t vertex_count = 0;
+  std::uint64_t triangle_count = 0;
+  Bounds bounds;  // of all vertices, model units
+};
+
+// Reads `reader` to its end. `batch_bytes` bounds the triangle record batch (at least one
+// record). unsupported when the triangles would need ids of 2^32 or more.
+Result<SplitResult> split_ply(PlyReader& reader, std::size_t batch_bytes, const SplitSinks& sinks);
+
+// The seed's two files: `vertex_path` (vertex records) and `triangle_path` (TriangleRecord),
+// each written through a buffer of `buffer_bytes`. Files are removed again on error.
+Result<SplitResult> split_ply_to_files(const std::filesystem::path& ply,
+                                       const std::filesystem::path& vertex_path,
+                                       const std::filesystem::path& triangle_path,
+                                       std::size_t buffer_bytes);
+
+}  // namespace octolod::bake

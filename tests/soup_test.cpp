@@ -1,0 +1,364 @@
+// Triangle soup stage (seed 3.3, 4.2, Table 4.1): split into vertex and triangle index files,
+// three sort + dereference passes out of core, the in-core gather, and the in-memory reference
+// all give the same bytes; failures (out of space, read errors, bad options) clean up.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <numeric>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "octolod/bake/soup.h"
+#include "octolod/formats/ply_reader.h"
+#include "octolod/formats/ply_writer.h"
+#include "record_file.h"
+#include "split.h"
+
+namespace octolod::bake {
+namespace {
+
+class WorkDir {
+ public:
+  WorkDir() {
+    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    path_ = std::filesystem::temp_directory_path() /
+            ("octolod-soup-" + std::to_string(::getpid()) + "-" + info->name());
+    std::filesystem::remove_all(path_);
+    std::filesystem::create_directories(path_ / "work");
+  }
+  ~WorkDir() { std::filesystem::remove_all(path_); }
+  std::filesystem::path file(const std::string& name) const { return path_ / name; }
+  // Where the stage's temporary files go.
+  std::filesystem::path work() const { return path_ / "work"; }
+  std::size_t work_file_count() const {
+    return static_cast<std::size_t>(std::distance(std::filesystem::directory_iterator(work()),
+                                                  std::filesystem::directory_iterator()));
+  }
+
+ private:
+  std::filesystem::path path_;
+};
+
+std::string read_bytes(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+}
+
+std::string as_string(const std::vector<std::byte>& bytes) {
+  return std::string(reinterpret_cast<const char*>(bytes.data()), bytes.size());
+}
+
+// A w x h grid of quads (2 triangles each) on a wavy surface, with every attribute. Vertex ids
+// are shuffled by a fixed permutation so the sort passes have real work to do, and one
+// degenerate triangle (a repeated vertex) is appended.
+struct GridMesh {
+  VertexLayout layout{true, true, true};
+  std::vector<float> vertices;
+  std::vector<std::uint32_t> triangles;
+};
+
+GridMesh make_grid(std::uint32_t w, std::uint32_t h) {
+  GridMesh m;
+  const std::uint32_t n = (w + 1) * (h + 1);
+  // Position of grid vertex g in the file: a multiplicative permutation of [0, n).
+  std::uint32_t mult = 7919;
+  while (std::gcd(mult, n) != 1) ++mult;
+  const auto slot = [&](std::uint32_t g) {
+    return static_cast<std::uint32_t>((std::uint64_t{g} * mult) % n);
+  };
+  m.vertices.resize(std::size_t{n} * m.layout.floats());
+  for (std::uint32_t y = 0; y <= h; ++y) {
+    for (std::uint32_t x = 0; x <= w; ++x) {
+      const std::uint32_t g = y * (w + 1) + x;
+      float* v = &m.vertices[std::size_t{slot(g)} * m.layout.floats()];
+      const float fx = static_cast<float>(x), fy = static_cast<float>(y);
+      const float z = std::sin(fx * 0.1f) * std::cos(fy * 0.07f);
+      const float values[11] = {fx, fy, z, 0.0f, 0.0f, 1.0f, fx / static_cast<float>(w),
+                                fy / static_cast<float>(h), 0.5f, fx * 0.01f, fy * 0.01f};
+      std::copy(values, values + 11, v);
+    }
+  }
+  for (std::uint32_t y = 0; y < h; ++y) {
+    for (std::uint32_t x = 0; x < w; ++x) {
+      const std::uint32_t a = slot(y * (w + 1) + x), b = slot(y * (w + 1) + x + 1);
+      const std::uint32_t c = slot((y + 1) * (w + 1) + x), d = slot((y + 1) * (w + 1) + x + 1);
+      m.triangles.insert(m.triangles.end(), {a, b, d, a, d, c});
+    }
+  }
+  m.triangles.insert(m.triangles.end(), {slot(0), slot(0), slot(1)});
+  return m;
+}
+
+void write_mesh(const std::filesystem::path& path, const GridMesh& m) {
+  PlyWriteOptions options;
+  options.layout = m.layout;
+  options.color_type = PlyColorType::float32;  // keeps the floats exact
+  const Status st = write_ply(path, options, m.vertices, m.triangles);
+  ASSERT_TRUE(st.ok()) << st.message();
+}
+
+SoupOptions options_in(const WorkDir& dir, std::uint64_t budget) {
+  SoupOptions o;
+  o.memory_budget_bytes = budget;
+  o.work_dir = dir.work();
+  return o;
+}
+
+// Tiny mesh, vertex ids as written:
+//
+//   3 ----- 2
+//   | \  1  |        triangle 0: 0 1 2
+//   |  \    |        triangle 1: 0 2 3
+//   | 0 \   |        triangle 2: 1 1 0  (degenerate, kept)
+//   0 ----- 1
+//
+// Positions only; vertex i is at (i, 10 i, 100 i).
+TEST(Soup, DereferenceInMemoryFollowsTheRecordContract) {
+  const std::vector<float> vertices = {0, 0, 0, 1, 10, 100, 2, 20, 200, 3, 30, 300};
+  const std::vector<std::uint32_t> triangles = {0, 1, 2, 0, 2, 3, 1, 1, 0};
+  const VertexLayout layout;
+  ASSERT_EQ(soup_record_bytes(layout), 40u);
+  const auto soup = dereference_in_memory(vertices, triangles, layout, SoupOrder::by_triangle);
+  ASSERT_EQ(soup.size(), 3 * 40u);
+  for (std::uint32_t t = 0; t < 3; ++t) {
+    const std::byte* rec = soup.data() + t * 40;
+    EXPECT_EQ(load_soup_triangle_id(rec, layout), TriangleId{t});
+    for (int c = 0; c < 3; ++c) {
+      float p[3];
+      load_soup_corner(rec, layout, c, p);
+      const float id = static_cast<float>(triangles[3 * t + static_cast<std::uint32_t>(c)]);
+      EXPECT_EQ(p[0], id);
+      EXPECT_EQ(p[1], 10 * id);
+      EXPECT_EQ(p[2], 100 * id);
+    }
+  }
+  // by_last_corner: corner 2 ids 2, 3, 0 -> triangles 2, 0, 1.
+  const auto by_last = dereference_in_memory(vertices, triangles, layout);
+  ASSERT_EQ(by_last.size(), soup.size());
+  EXPECT_EQ(load_soup_triangle_id(by_last.data(), layout), TriangleId{2});
+  EXPECT_EQ(load_soup_triangle_id(by_last.data() + 40, layout), TriangleId{0});
+  EXPECT_EQ(load_soup_triangle_id(by_last.data() + 80, layout), TriangleId{1});
+  EXPECT_EQ(std::memcmp(by_last.data() + 40, soup.data(), 40), 0);
+}
+
+TEST(Soup, SplitWritesVertexAndTriangleFilesInFileOrder) {
+  WorkDir dir;
+  const GridMesh mesh = make_grid(20, 10);
+  write_mesh(dir.file("grid.ply"), mesh);
+  auto split = split_ply_to_files(dir.file("grid.ply"), dir.file("v.bin"), dir.file("t.bin"), 4096);
+  ASSERT_TRUE(split.ok()) << split.status().message();
+  EXPECT_EQ(split->layout, mesh.layout);
+  EXPECT_EQ(split->vertex_count, mesh.vertices.size() / 11);
+  EXPECT_EQ(split->triangle_count, mesh.triangles.size() / 3);
+  Bounds bounds;
+  for (std::size_t i = 0; i < mesh.vertices.size(); i += 11) bounds.extend(&mesh.vertices[i]);
+  EXPECT_EQ(split->bounds, bounds);
+  EXPECT_EQ(split->bounds.max[0], 20.0f);
+  const std::string v = read_bytes(dir.file("v.bin"));
+  ASSERT_EQ(v.size(), mesh.vertices.size() * 4);
+  EXPECT_EQ(std::memcmp(v.data(), mesh.vertices.data(), v.size()), 0);
+  const std::string t = read_bytes(dir.file("t.bin"));
+  ASSERT_EQ(t.size(), mesh.triangles.size() / 3 * sizeof(TriangleRecord));
+  for (std::size_t i = 0; i < mesh.triangles.size() / 3; ++i) {
+    TriangleRecord r;
+    std::memcpy(&r, t.data() + i * sizeof r, sizeof r);
+    for (int c = 0; c < 3; ++c)
+      ASSERT_EQ(static_cast<std::uint32_t>(r.corner[c]), mesh.triangles[3 * i + static_cast<std::size_t>(c)]);
+    ASSERT_EQ(r.triangle, TriangleId{static_cast<std::uint32_t>(i)});
+  }
+}
+
+// The seed's out-of-core passes with a tiny budget (hundreds of runs, multi-pass merges) write
+// exactly the bytes the in-core path and the in-memory dereference produce, in both orders and
+// for one or two threads: 300K triangles.
+TEST(Soup, OutOfCoreWithTinyBudgetIsBitIdenticalToInCore) {
+  WorkDir dir;
+  const GridMesh mesh = make_grid(500, 300);
+  write_mesh(dir.file("grid.ply"), mesh);
+  for (const SoupOrder order : {SoupOrder::by_last_corner, SoupOrder::by_triangle}) {
+    const std::string expected =
+        as_string(dereference_in_memory(mesh.vertices, mesh.triangles, mesh.layout, order));
+    SoupOptions in_core = options_in(dir, 256u << 20);
+    in_core.order = order;
+    auto a = build_soup(dir.file("grid.ply"), in_core);
+    ASSERT_TRUE(a.ok()) << a.status().message();
+    EXPECT_TRUE(a->in_core);
+    EXPECT_EQ(a->triangle_count, 300001u);
+    EXPECT_EQ(a->vertex_count, 501u * 301u);
+    EXPECT_EQ(a->layout, mesh.layout);
+    EXPECT_TRUE(read_bytes(a->soup.path()) == expected);
+
+    SoupOptions tiny = options_in(dir, kMinSoupBudget);
+    tiny.order = order;
+    tiny.threads = order == SoupOrder::by_triangle ? 1 : 2;
+    auto b = build_soup(dir.file("grid.ply"), tiny);
+    ASSERT_TRUE(b.ok()) << b.status().message();
+    EXPECT_FALSE(b->in_core);
+    EXPECT_TRUE(read_bytes(b->soup.path()) == expected);
+    ASSERT_EQ(b->sorts.size(), order == SoupOrder::by_triangle ? 4u : 3u);
+    for (const SortStats& s : b->sorts) {
+      EXPECT_FALSE(s.in_core);
+      EXPECT_GT(s.runs, 50u);
+      EXPECT_GE(s.merge_passes, 2u);
+      EXPECT_EQ(s.records, 300001u);
+    }
+    EXPECT_EQ(b->bounds, a->bounds);
+  }
+  EXPECT_EQ(dir.work_file_count(), 0u);  // results destroyed: soups removed too
+}
+
+TEST(Soup, OutOfCoreForcedWithLargeBudgetMatchesInCore) {
+  WorkDir dir;
+  const GridMesh mesh = make_grid(120, 80);
+  write_mesh(dir.file("grid.ply"), mesh);
+  const std::string expected =
+      as_string(dereference_in_memory(mesh.vertices, mesh.triangles, mesh.layout));
+  SoupOptions options = options_in(dir, 1u << 20);
+  for (const bool force : {false, true}) {
+    options.force_out_of_core = force;
+    auto r = build_soup(dir.file("grid.ply"), options);
+    ASSERT_TRUE(r.ok()) << r.status().message();
+    EXPECT_EQ(r->in_core, !force);
+    EXPECT_TRUE(read_bytes(r->soup.path()) == expected);
+    EXPECT_GE(r->seconds.total, r->seconds.sort);
+  }
+}
+
+TEST(Soup, FacesBeforeVerticesGiveTheSameSoup) {
+  WorkDir dir;
+  const std::string ply =
+      "ply\nformat ascii 1.0\nelement face 3\nproperty list uchar int vertex_indices\n"
+      "element vertex 5\nproperty float x\nproperty float y\nproperty float z\nend_header\n"
+      "3 4 1 2\n4 0 2 3 4\n3 3 3 1\n"
+      "0 0 0\n1 0 0\n1 1 0\n0 1 0\n0.5 0.5 1\n";
+  std::ofstream(dir.file("f.ply"), std::ios::binary) << ply;
+  const std::vector<float> vertices = {0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0, 0.5f, 0.5f, 1};
+  // Fan triangulation of the quad: (0 2 3) (0 3 4).
+  const std::vector<std::uint32_t> triangles = {4, 1, 2, 0, 2, 3, 0, 3, 4, 3, 3, 1};
+  const std::string expected =
+      as_string(dereference_in_memory(vertices, triangles, VertexLayout{}));
+  for (const bool force : {false, true}) {
+    SoupOptions options = options_in(dir, 1u << 20);
+    options.force_out_of_core = force;
+    auto r = build_soup(dir.file("f.ply"), options);
+    ASSERT_TRUE(r.ok()) << r.status().message();
+    EXPECT_EQ(r->triangle_count, 4u);
+    EXPECT_TRUE(read_bytes(r->soup.path()) == expected);
+  }
+}
+
+TEST(Soup, ProgressReportsEveryStage) {
+  WorkDir dir;
+  const GridMesh mesh = make_grid(30, 30);
+  write_mesh(dir.file("grid.ply"), mesh);
+  std::set<std::string> stages;
+  SoupOptions options = options_in(dir, 1u << 20);
+  options.force_out_of_core = true;
+  options.order = SoupOrder::by_triangle;
+  std::uint64_t last_total = 0, last_done = 0;
+  options.progress = [&](std::string_view stage, std::uint64_t done, std::uint64_t total) {
+    stages.insert(std::string(stage));
+    EXPECT_LE(done, total);
+    last_done = done;
+    last_total = total;
+  };
+  auto r = build_soup(dir.file("grid.ply"), options);
+  ASSERT_TRUE(r.ok()) << r.status().message();
+  EXPECT_EQ(stages, (std::set<std::string>{"split", "dereference 0", "dereference 1",
+                                           "dereference 2", "order"}));
+  EXPECT_EQ(last_done, r->triangle_count);
+  EXPECT_EQ(last_total, r->triangle_count);
+}
+
+TEST(Soup, BadOptionsAreUsageErrors) {
+  WorkDir dir;
+  const GridMesh mesh = make_grid(4, 4);
+  write_mesh(dir.file("grid.ply"), mesh);
+  auto small = build_soup(dir.file("grid.ply"), options_in(dir, kMinSoupBudget - 1));
+  ASSERT_FALSE(small.ok());
+  EXPECT_EQ(small.status().code(), ErrorCode::usage);
+  SoupOptions missing = options_in(dir, 1u << 20);
+  missing.work_dir = dir.file("no-such-dir");
+  auto m = build_soup(dir.file("grid.ply"), missing);
+  ASSERT_FALSE(m.ok());
+  EXPECT_EQ(m.status().code(), ErrorCode::usage);
+  EXPECT_NE(m.status().message().find("no-such-dir"), std::string::npos);
+  auto absent = build_soup(dir.file("absent.ply"), options_in(dir, 1u << 20));
+  ASSERT_FALSE(absent.ok());
+  EXPECT_NE(absent.status().message().find("absent.ply"), std::string::npos);
+}
+
+// Out of space at any point of the out-of-core path (vertex file, runs, merges, soup): an io
+// error naming a temporary file, and nothing left in the work directory.
+TEST(Soup, OutOfSpaceAnywhereIsAnIoErrorAndLeavesNoFiles) {
+  WorkDir dir;
+  const GridMesh mesh = make_grid(100, 60);
+  write_mesh(dir.file("grid.ply"), mesh);
+  SoupOptions options = options_in(dir, kMinSoupBudget);
+  options.force_out_of_core = true;
+  options.order = SoupOrder::by_triangle;
+  std::uint64_t total_written = 0;
+  {
+    auto r = build_soup(dir.file("grid.ply"), options);
+    ASSERT_TRUE(r.ok());
+    for (const SortStats& s : r->sorts) total_written += s.bytes_written;
+  }
+  for (std::uint64_t after = 0; after < total_written; after += total_written / 13 + 1) {
+    Status failure;
+    {
+      ScopedIoFault fault(ScopedIoFault::Op::write, after, ENOSPC);
+      auto r = build_soup(dir.file("grid.ply"), options);
+      if (!r.ok()) failure = r.status();
+    }
+    ASSERT_FALSE(failure.ok()) << "fault after " << after;
+    EXPECT_EQ(failure.code(), ErrorCode::io);
+    EXPECT_NE(failure.message().find("No space left on device"), std::string::npos);
+    EXPECT_NE(failure.message().find(dir.work().string()), std::string::npos) << failure.message();
+    EXPECT_EQ(dir.work_file_count(), 0u) << "fault after " << after;
+  }
+}
+
+TEST(Soup, ReadErrorIsAnIoErrorAndLeavesNoFiles) {
+  WorkDir dir;
+  const GridMesh mesh = make_grid(100, 60);
+  write_mesh(dir.file("grid.ply"), mesh);
+  SoupOptions options = options_in(dir, kMinSoupBudget);
+  options.force_out_of_core = true;
+  for (const std::uint64_t after : {std::uint64_t{0}, std::uint64_t{100000}, std::uint64_t{1000000}}) {
+    Status failure;
+    {
+      ScopedIoFault fault(ScopedIoFault::Op::read, after, EIO);
+      auto r = build_soup(dir.file("grid.ply"), options);
+      if (!r.ok()) failure = r.status();
+    }
+    ASSERT_FALSE(failure.ok());
+    EXPECT_EQ(failure.code(), ErrorCode::io);
+    EXPECT_EQ(dir.work_file_count(), 0u);
+  }
+}
+
+TEST(Soup, ReleasedSoupOutlivesTheResult) {
+  WorkDir dir;
+  const GridMesh mesh = make_grid(4, 4);
+  write_mesh(dir.file("grid.ply"), mesh);
+  std::filesystem::path kept;
+  {
+    auto r = build_soup(dir.file("grid.ply"), options_in(dir, 1u << 20));
+    ASSERT_TRUE(r.ok());
+    kept = r->soup.release();
+  }
+  EXPECT_EQ(std::filesystem::file_size(kept), 33u * soup_record_bytes(mesh.layout));
+  std::filesystem::remove(kept);
+}
+
+}  // namespace
+}  // namespace octolod::bake
