@@ -1,0 +1,160 @@
+// StreamingTree: view-dependent selection and paging of a baked LOD octree (ARCHITECTURE.md "The
+// runtime"; seed 002 sections 3.6 and 4.5; El-Sana & Chiang 2000 for prefetching, buffer
+// management with second chance and I/O separate from rendering; Holst & Schumann for caching
+// measured along camera paths).
+//
+// Per update(camera): install the loads that completed since the last frame, select a cut of the
+// octree (frustum culling, screen-space error or distance thresholds), replace every wanted LOD
+// that is not resident by a resident substitute (a frame never waits on I/O), then queue loads
+// for what was missing and prefetches for what is likely next.
+//
+// Thread safety: a StreamingTree is used from one thread (the render thread); update() and the
+// accessors must not run concurrently. Loads run on the injected Executor and read through the
+// injected NodeSource; both may be shared by several trees.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <memory>
+#include <string_view>
+#include <vector>
+
+#include "octolod/formats/manifest.h"
+#include "octolod/formats/node_file.h"
+#include "octolod/formats/status.h"
+#include "octolod/runtime/camera.h"
+#include "octolod/runtime/executor.h"
+#include "octolod/runtime/node_source.h"
+
+namespace octolod::runtime {
+
+enum class SelectionMode {
+  // Coarsest LOD whose screen-space error error·viewport_h / (2·tan(fovy/2)·distance) is at most
+  // target_sse_pixels.
+  screen_space_error,
+  // The seed's pure distance rule (seed 4.5), see StreamingOptions::distance_thresholds.
+  distance,
+};
+
+struct StreamingOptions {
+  // Cache budget in bytes of decoded NodeMesh payload (vertices + indices, 4 bytes per float or
+  // index), counting resident entries and second-chance entries alike; loads in flight reserve
+  // their size up front, so resident bytes never exceed it. Must hold at least the root's coarsest
+  // LOD. Larger keeps more of the tree resident (fewer reloads); smaller means more fallbacks.
+  std::uint64_t max_resident_bytes = 256ull << 20;
+  // Screen-space error target in pixels (screen_space_error mode). Larger draws fewer triangles.
+  double target_sse_pixels = 2.0;
+  SelectionMode mode = SelectionMode::screen_space_error;
+  // distance mode: distance in model units below which a node at depth k refines into its
+  // children is distance_thresholds[min(k, size-1)]; a node not refined draws its finest LOD up
+  // to twice that distance and one LOD coarser per further doubling. Must be non-empty and
+  // positive in distance mode.
+  std::vector<double> distance_thresholds;
+  // Prefetch the LOD above and below every drawn one (parent / children of the cut) and the cut
+  // along the predicted camera motion, with lower priority than needed loads and only into
+  // budget not used by recently drawn entries.
+  bool prefetch = true;
+  // How many frames ahead the camera motion is extrapolated for prefetching.
+  double prediction_frames = 15.0;
+  // Prefetches never reclaim a second-chance entry used within this many frames.
+  std::uint32_t prefetch_protect_frames = 30;
+  // The selected cut is kept within this fraction of max_resident_bytes: when the cut at the
+  // target would need more, the frame's target is relaxed (FrameStats::coarsening) until it fits.
+  // The rest of the budget holds the previous cut while the next one loads, second-chance
+  // entries and prefetches. 1 lets the cut take everything (then a cut change may stall on
+  // fallbacks until the old cut is no longer drawn).
+  double max_cut_fraction = 0.5;
+  // Loads queued or running at once. More hides latency; fewer keeps priorities fresh.
+  std::uint32_t max_loads_in_flight = 8;
+  // Called once per node LOD that failed to load (missing file, checksum failure, wrong layout),
+  // from the thread that calls update(). Null: silent.
+  std::function<void(std::string_view message)> log;
+};
+
+struct DrawItem {
+  std::uint32_t node = 0;  // index into Manifest::nodes
+  std::uint32_t lod = 0;   // index into NodeInfo::lods (0 = finest)
+  std::uint32_t depth = 0; // octree depth of `node`, root = 0
+  // GPU-ready interleaved vertices (model space) + 32-bit indices. Immutable; stays valid as long
+  // as the caller holds this pointer, whatever the cache does afterwards.
+  std::shared_ptr<const NodeMesh> mesh;
+  // True when this stands in for a wanted LOD that is not resident yet (or failed to load):
+  // another LOD of the same node, an ancestor, or descendants covering the same region.
+  bool is_fallback = false;
+};
+
+// Counters of one update() call.
+struct FrameStats {
+  std::uint32_t visited = 0;        // nodes whose bounds were tested
+  std::uint32_t culled = 0;         // of those, outside the frustum (their subtree is skipped)
+  std::uint32_t wanted = 0;         // node LODs in the selected cut
+  std::uint32_t drawn_nodes = 0;    // DrawItems returned
+  std::uint64_t drawn_triangles = 0;
+  std::uint64_t resident_bytes = 0; // cache holdings after this frame (resident + second chance)
+  std::uint64_t reserved_bytes = 0; // budget held by loads queued or running
+  std::uint32_t loads_issued = 0;   // loads queued this frame
+  std::uint32_t loads_completed = 0;   // loads installed this frame
+  std::uint32_t loads_failed = 0;      // loads that failed this frame (node LOD marked bad)
+  std::uint32_t loads_cancelled = 0;   // queued loads dropped before they started: no longer wanted
+  std::uint32_t loads_discarded = 0;   // completed loads that no longer fit the budget
+  std::uint32_t loads_in_flight = 0;   // queued or running after this frame
+  std::uint32_t cache_hits = 0;        // wanted LODs that were resident
+  std::uint32_t second_chance_hits = 0;  // of those, reclaimed from the free list without I/O
+  std::uint32_t cache_misses = 0;      // wanted LODs that were not resident
+  std::uint32_t fallbacks = 0;         // DrawItems with is_fallback
+  std::uint64_t wanted_bytes = 0;   // decoded size of the whole wanted cut
+  // 1 when the cut meets target_sse_pixels (or the distance thresholds); otherwise the factor by
+  // which distances were scaled up (the error target relaxed) to fit max_cut_fraction of the budget.
+  float coarsening = 1.0f;
+  std::uint32_t holes = 0;  // wanted regions with nothing resident to draw: only before the
+                            // root's coarsest LOD has arrived, or when it failed to load
+  // update() never blocks on a load, so this is always 0; a frame with cache_misses > 0 drew
+  // fallbacks instead of waiting.
+  std::uint32_t waiting_on_io = 0;
+  double selection_ms = 0;  // wall time of the whole update() call
+};
+
+struct FrameResult {
+  std::vector<DrawItem> draws;  // in octree depth-first order; no two overlap
+  FrameStats stats;
+};
+
+class StreamingTree {
+ public:
+  // Plans from `manifest` alone; loads nothing yet (the root's coarsest LOD is requested first
+  // by the first update() and stays pinned once loaded; a root without LODs just means holes until
+  // deeper nodes arrive). Fails with ErrorCode::usage on meaningless options or a budget that
+  // cannot hold the root's coarsest LOD, ErrorCode::bad_input on a manifest without geometry.
+  static Result<std::unique_ptr<StreamingTree>> open(Manifest manifest,
+                                                     std::shared_ptr<const NodeSource> source,
+                                                     std::shared_ptr<Executor> executor,
+                                                     StreamingOptions options);
+  // Reads `root`/manifest.json and streams the node files below `root` through a FileSource.
+  static Result<std::unique_ptr<StreamingTree>> open_directory(const std::filesystem::path& root,
+                                                               std::shared_ptr<Executor> executor,
+                                                               StreamingOptions options);
+  // Loads already posted finish on their own (they own their shared state) and are discarded.
+  ~StreamingTree();
+  StreamingTree(const StreamingTree&) = delete;
+  StreamingTree& operator=(const StreamingTree&) = delete;
+
+  // Selects and pages for one frame. Never waits on I/O. The returned reference stays valid until
+  // the next update() or the tree's destruction; copy the DrawItems (or their meshes) to keep them.
+  const FrameResult& update(const Camera& camera);
+
+  const Manifest& manifest() const;
+  const StreamingOptions& options() const;
+  // Whether a node LOD is in the cache right now (resident or second chance).
+  bool is_resident(std::uint32_t node, std::uint32_t lod) const;
+  // Whether a node LOD failed to load and will never be requested again.
+  bool is_bad(std::uint32_t node, std::uint32_t lod) const;
+
+ private:
+  struct Impl;
+  explicit StreamingTree(std::unique_ptr<Impl> impl);
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace octolod::runtime

@@ -1,0 +1,88 @@
+// LoadQueue, see load_queue.h.
+#include "load_queue.h"
+
+#include <algorithm>
+#include <utility>
+
+namespace octolod::runtime {
+
+LoadQueue::LoadQueue(std::shared_ptr<const NodeSource> source, std::vector<std::string> files,
+                     VertexLayout layout)
+    : source_(std::move(source)), files_(std::move(files)), layout_(layout) {}
+
+void LoadQueue::take_pending(std::vector<std::uint32_t>& out) {
+  out.clear();
+  std::lock_guard lock(mutex_);
+  out.swap(pending_);
+}
+
+void LoadQueue::set_pending(std::vector<std::uint32_t>& in) {
+  {
+    std::lock_guard lock(mutex_);
+    pending_.swap(in);
+  }
+  in.clear();
+}
+
+void LoadQueue::take_completed(std::vector<LoadCompletion>& out) {
+  out.clear();
+  std::lock_guard lock(mutex_);
+  out.swap(completed_);
+}
+
+std::uint32_t LoadQueue::claim_tasks(std::uint32_t max_tasks) {
+  std::lock_guard lock(mutex_);
+  const auto wanted = std::min<std::uint32_t>(max_tasks, static_cast<std::uint32_t>(pending_.size()));
+  const std::uint32_t more = wanted > tasks_ ? wanted - tasks_ : 0;
+  tasks_ += more;
+  return more;
+}
+
+void LoadQueue::shutdown() {
+  std::lock_guard lock(mutex_);
+  shutdown_ = true;
+  pending_.clear();
+}
+
+void LoadQueue::run_task() {
+  for (;;) {
+    std::uint32_t slot = 0;
+    {
+      std::lock_guard lock(mutex_);
+      if (shutdown_ || pending_.empty()) {
+        --tasks_;
+        return;
+      }
+      slot = pending_.back();
+      pending_.pop_back();
+    }
+    LoadCompletion done = load(slot);
+    std::lock_guard lock(mutex_);
+    if (!shutdown_) completed_.push_back(std::move(done));
+  }
+}
+
+LoadCompletion LoadQueue::load(std::uint32_t slot) const {
+  LoadCompletion done;
+  done.slot = slot;
+  const std::string& file = files_[slot];
+  Result<std::vector<std::byte>> bytes = source_->read(file);
+  if (!bytes.ok()) {
+    done.status = bytes.status();
+    return done;
+  }
+  Result<NodeMesh> mesh = decode_node_file(bytes.value(), file);
+  if (!mesh.ok()) {
+    done.status = mesh.status();
+    return done;
+  }
+  if (mesh->layout != layout_) {
+    done.status = bad_input_error(file + ": vertex layout " + mesh->layout.describe() +
+                                  " differs from the manifest's " + layout_.describe());
+    return done;
+  }
+  done.mesh = std::make_shared<const NodeMesh>(std::move(mesh).value());
+  return done;
+}
+
+}  // namespace octolod::runtime

@@ -1,0 +1,101 @@
+// Cut selection, see selection.h. The culling test is the p-vertex / n-vertex test with plane
+// masks (a box entirely inside a plane's half-space passes that plane for its whole subtree,
+// since subtree boxes nest); the error rule is ARCHITECTURE.md's
+//   error · viewport_h / (2·tan(fovy/2) · distance) <= target_sse_pixels
+// rewritten as error <= distance · error_per_distance, so no division per LOD.
+#include "selection.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace octolod::runtime {
+
+SelectionView make_selection_view(const Camera& camera, const StreamingOptions& options) {
+  SelectionView v;
+  v.frustum = extract_frustum(camera.projection * camera.view);
+  v.eye = camera.position;
+  const float tan_half = std::tan(0.5f * camera.fovy_radians);
+  v.pixels_per_unit = camera.viewport_height_px / (2.0f * std::max(tan_half, 1e-6f));
+  v.error_per_distance = static_cast<float>(options.target_sse_pixels) / v.pixels_per_unit;
+  v.mode = options.mode;
+  v.distance_thresholds = &options.distance_thresholds;
+  return v;
+}
+
+float distance_to_node(const TreeLayout& tree, std::uint32_t node, glm::vec3 eye) {
+  const LayoutNode& n = tree.nodes[node];
+  const glm::vec3 outside = glm::max(glm::abs(eye - n.center) - n.half, glm::vec3(0.0f));
+  return std::max(glm::length(outside), tree.min_distance);
+}
+
+namespace {
+
+constexpr std::uint32_t kRefine = kNoSlot;
+
+// The slot to draw for `node` at `distance`, or kRefine to descend into its children.
+std::uint32_t choose_lod(const TreeLayout& tree, const LayoutNode& n, float true_distance,
+                         const SelectionView& view) {
+  if (n.lod_count == 0) return kRefine;
+  const float distance = true_distance * view.coarsening;
+  if (view.mode == SelectionMode::screen_space_error) {
+    const float allowed = distance * view.error_per_distance;
+    for (std::uint32_t i = n.lod_count; i-- > 0;)
+      if (tree.slot_error[n.lod_begin + i] <= allowed) return n.lod_begin + i;
+    return n.child_count > 0 ? kRefine : n.lod_begin;  // a leaf draws its finest at worst
+  }
+  const std::vector<double>& thresholds = *view.distance_thresholds;
+  const double refine_below = thresholds[std::min<std::size_t>(n.depth, thresholds.size() - 1)];
+  if (distance < refine_below && n.child_count > 0) return kRefine;
+  if (distance < 2.0 * refine_below) return n.lod_begin;
+  const auto coarser = static_cast<std::uint32_t>(std::floor(std::log2(distance / refine_below)));
+  return n.lod_begin + std::min(coarser, n.lod_count - 1);
+}
+
+}  // namespace
+
+void select_cut(const TreeLayout& tree, const SelectionView& view, std::vector<StackEntry>& stack,
+                std::vector<WantedLod>& cut, SelectionCounters& counters) {
+  cut.clear();
+  stack.clear();
+  stack.push_back({0, 0x3Fu});
+  const auto& planes = view.frustum.planes;
+  while (!stack.empty()) {
+    const StackEntry entry = stack.back();
+    stack.pop_back();
+    const LayoutNode& n = tree.nodes[entry.node];
+    ++counters.visited;
+
+    // cull
+    std::uint32_t mask = entry.plane_mask;
+    bool outside = false;
+    for (std::uint32_t i = 0; i < 6; ++i) {
+      if ((mask & (1u << i)) == 0) continue;
+      const Plane& p = planes[i];
+      const float c = glm::dot(p.normal, n.center) + p.d;
+      const float r = std::abs(p.normal.x) * n.half.x + std::abs(p.normal.y) * n.half.y +
+                      std::abs(p.normal.z) * n.half.z;
+      if (c + r < 0.0f) {
+        outside = true;
+        break;
+      }
+      if (c - r >= 0.0f) mask &= ~(1u << i);
+    }
+    if (outside) {
+      ++counters.culled;
+      continue;
+    }
+
+    // choose a LOD or refine
+    const glm::vec3 delta = glm::max(glm::abs(view.eye - n.center) - n.half, glm::vec3(0.0f));
+    const float distance = std::max(glm::length(delta), tree.min_distance);
+    const std::uint32_t slot = choose_lod(tree, n, distance, view);
+    if (slot != kRefine) {
+      cut.push_back({entry.node, slot, n.diagonal * view.pixels_per_unit / distance});
+      continue;
+    }
+    for (std::uint32_t c = n.child_count; c-- > 0;)
+      stack.push_back({tree.children[n.child_begin + c], mask});
+  }
+}
+
+}  // namespace octolod::runtime

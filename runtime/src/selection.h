@@ -1,0 +1,56 @@
+// View-dependent cut selection (seed 4.5; ARCHITECTURE.md "The runtime"): frustum culling by
+// box vs plane on subtree boxes, then per node the coarsest LOD within the screen-space error
+// target (or the seed's distance thresholds), else its children. Iterative, allocation-free in
+// steady state (the caller owns and reuses the output vectors).
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "octolod/runtime/camera.h"
+#include "octolod/runtime/streaming_tree.h"
+#include "tree_layout.h"
+
+namespace octolod::runtime {
+
+// Per-frame view parameters, derived once from the Camera and the options.
+struct SelectionView {
+  Frustum frustum;
+  glm::vec3 eye{0.0f};               // model space
+  float pixels_per_unit = 1.0f;      // viewport_h / (2·tan(fovy/2)): SSE = error·this / distance
+  float error_per_distance = 0.0f;   // target_sse / pixels_per_unit: error allowed per unit distance
+  SelectionMode mode = SelectionMode::screen_space_error;
+  const std::vector<double>* distance_thresholds = nullptr;  // distance mode only
+  // >= 1: distances are multiplied by this before choosing (so the allowed error grows, or the
+  // distance thresholds shrink, by this factor). Keeps a cut within the memory budget.
+  float coarsening = 1.0f;
+};
+SelectionView make_selection_view(const Camera& camera, const StreamingOptions& options);
+
+// One node LOD of the cut.
+struct WantedLod {
+  std::uint32_t node = 0;  // internal (preorder) index
+  std::uint32_t slot = 0;  // TreeLayout slot
+  // Projected size of the node's box in pixels (diagonal·pixels_per_unit / distance): larger and
+  // nearer nodes load first.
+  float priority = 0.0f;
+};
+
+struct SelectionCounters {
+  std::uint32_t visited = 0;
+  std::uint32_t culled = 0;
+};
+
+struct StackEntry {
+  std::uint32_t node;
+  std::uint32_t plane_mask;  // planes the parent box was not entirely inside of
+};
+
+// Writes the cut to `cut` in preorder (increasing node index). `stack` is scratch.
+void select_cut(const TreeLayout& tree, const SelectionView& view, std::vector<StackEntry>& stack,
+                std::vector<WantedLod>& cut, SelectionCounters& counters);
+
+// Distance from `eye` to the box (0 inside), clamped to at least tree.min_distance.
+float distance_to_node(const TreeLayout& tree, std::uint32_t node, glm::vec3 eye);
+
+}  // namespace octolod::runtime

@@ -1,0 +1,490 @@
+// runtime_tests: selection, paging and fallbacks of octolod::runtime, stepped frame by frame
+// against an in-memory source with a SynchronousExecutor (cesium-native style: assert per-frame
+// counters). Numbers for the synthetic tree (make_full_octree, cube [0,64]^3, 60 degree fov,
+// 1000 px viewport, target 2 px): an error e meets the target from distance 433·e on, so
+//   root     lods (0.64, 2.56): coarse from 1108.5, fine from 277
+//   depth 1  lods (0.32, 1.28): coarse from 554,    fine from 138.6
+//   leaves   lods (0,    0.64): coarse from 277,    fine always
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <chrono>
+#include <thread>
+
+#include "runtime_test_helpers.h"
+
+namespace octolod::runtime {
+namespace {
+
+using testing::draws_of;
+using testing::expect_covering_cut;
+using testing::look;
+using testing::make_full_octree;
+using testing::settle;
+using testing::SyntheticTree;
+
+const glm::vec3 kCenter(32.0f, 32.0f, 32.0f);
+// On the +z axis through the centre, `d` model units in front of the cube's z = 64 face.
+Camera front(float d) { return look(glm::vec3(32.0f, 32.0f, 64.0f + d), kCenter); }
+
+struct Fixture {
+  SyntheticTree tree;
+  std::shared_ptr<SynchronousExecutor> executor = std::make_shared<SynchronousExecutor>();
+  std::unique_ptr<StreamingTree> streaming;
+  std::vector<std::string> log;
+
+  explicit Fixture(std::uint32_t levels, StreamingOptions options = {}) : tree(make_full_octree(levels)) {
+    options.log = [this](std::string_view message) { log.emplace_back(message); };
+    auto opened = StreamingTree::open(tree.manifest, tree.source, executor, std::move(options));
+    EXPECT_TRUE(opened.ok()) << opened.status().message();
+    if (opened.ok()) streaming = std::move(opened).value();
+  }
+  const FrameResult& settle_at(const Camera& camera) { return settle(*streaming, *executor, camera); }
+};
+
+// --- frustum ----------------------------------------------------------------------------------
+
+TEST(Frustum, BoxStraddlingTheFrustumWithEveryCornerOutsideIsKept) {
+  // Camera at the origin looking down -z. The slab spans the whole view at z in [-1000, -5] but
+  // each of its corners (x, y = +-1000) lies outside the side planes: the seed's "a corner is
+  // inside" test would cull it.
+  const Camera c = look(glm::vec3(0.0f), glm::vec3(0, 0, -1));
+  const Frustum f = extract_frustum(c.projection * c.view);
+  EXPECT_EQ(classify_box(f, glm::vec3(0, 0, -502.5f), glm::vec3(1000, 1000, 497.5f)), Containment::intersects);
+}
+
+TEST(Frustum, BoxBehindTheCameraIsOutsideAndBoxInFrontIsInside) {
+  const Camera c = look(glm::vec3(0.0f), glm::vec3(0, 0, -1));
+  const Frustum f = extract_frustum(c.projection * c.view);
+  EXPECT_EQ(classify_box(f, glm::vec3(0, 0, 2), glm::vec3(1)), Containment::outside);
+  EXPECT_EQ(classify_box(f, glm::vec3(0, 0, -50), glm::vec3(1)), Containment::inside);
+  EXPECT_EQ(classify_box(f, glm::vec3(0, 0, -20000), glm::vec3(1)), Containment::outside);  // past far
+}
+
+// --- selection --------------------------------------------------------------------------------
+
+TEST(Selection, FarCameraDrawsTheRootsCoarsestLodOnly) {
+  Fixture fx(3);
+  const FrameResult& frame = fx.settle_at(front(1468.0f));
+  EXPECT_EQ(frame.stats.visited, 1u);
+  EXPECT_EQ(frame.stats.culled, 0u);
+  EXPECT_EQ(frame.stats.wanted, 1u);
+  ASSERT_EQ(frame.draws.size(), 1u);
+  EXPECT_EQ(frame.draws[0].node, 0u);
+  EXPECT_EQ(frame.draws[0].lod, 1u);
+  EXPECT_FALSE(frame.draws[0].is_fallback);
+  EXPECT_EQ(frame.stats.drawn_triangles, SyntheticTree::kCoarseTriangles);
+}
+
+TEST(Selection, RefinementStopsWhenScreenSpaceErrorIsMet) {
+  Fixture fx(3);
+  // 200 units away the root's finest LOD is 4.6 px off, the depth-1 fine LODs (200..232 units
+  // away) at most 1.4 px: refine once, stop.
+  const FrameResult& frame = fx.settle_at(front(200.0f));
+  EXPECT_EQ(frame.stats.visited, 9u);
+  EXPECT_EQ(frame.stats.culled, 0u);
+  EXPECT_EQ(frame.stats.wanted, 8u);
+  EXPECT_EQ(frame.stats.drawn_nodes, 8u);
+  EXPECT_EQ(frame.stats.fallbacks, 0u);
+  EXPECT_EQ(frame.stats.cache_hits, 8u);
+  EXPECT_EQ(frame.stats.cache_misses, 0u);
+  EXPECT_EQ(frame.stats.drawn_triangles, 8u * SyntheticTree::kFineTriangles);
+  for (const DrawItem& d : frame.draws) {
+    EXPECT_EQ(d.depth, 1u);
+    EXPECT_EQ(d.lod, 0u);
+  }
+}
+
+TEST(Selection, MovingCloserRefines) {
+  Fixture fx(3);
+  const float distances[] = {1468.0f, 500.0f, 200.0f, 100.0f};
+  const std::uint64_t expected_triangles[] = {16, 64, 8 * 64, 64 * 64};
+  for (int i = 0; i < 4; ++i) {
+    const FrameResult& frame = fx.settle_at(front(distances[i]));
+    EXPECT_EQ(frame.stats.drawn_triangles, expected_triangles[i]) << "at distance " << distances[i];
+    EXPECT_EQ(frame.stats.fallbacks, 0u);
+  }
+}
+
+TEST(Selection, MatchesTheReferenceCutFromManyViewpoints) {
+  Fixture fx(4);
+  const Camera cameras[] = {
+      front(150.0f),
+      look(glm::vec3(-40, 80, 120), kCenter),
+      look(glm::vec3(10, 20, 30), glm::vec3(60, 50, 40)),   // inside the model
+      look(glm::vec3(32, 32, 32), glm::vec3(100, 32, 32)),  // at the centre, half of it behind
+      look(glm::vec3(300, -50, 10), kCenter),
+  };
+  for (const Camera& camera : cameras) {
+    const FrameResult& frame = fx.settle_at(camera);
+    std::map<std::uint32_t, std::uint32_t> expected;
+    testing::reference_cut(fx.tree.manifest, camera, 2.0, 0, expected);
+    EXPECT_EQ(draws_of(frame), expected);
+    EXPECT_EQ(frame.stats.fallbacks, 0u);
+    expect_covering_cut(fx.tree, frame, camera);
+  }
+}
+
+TEST(Selection, LargeNodeStraddlingTheFrustumIsKept) {
+  Fixture fx(3);
+  // Inside the root box near its centre: every corner of the root and of the depth-1 nodes is
+  // off screen, yet they straddle the view and must be refined, not culled.
+  const Camera camera = look(glm::vec3(33, 31, 30), glm::vec3(33, 31, -100));
+  const FrameResult& frame = fx.settle_at(camera);
+  EXPECT_GT(frame.stats.drawn_nodes, 0u);
+  std::map<std::uint32_t, std::uint32_t> expected;
+  testing::reference_cut(fx.tree.manifest, camera, 2.0, 0, expected);
+  EXPECT_EQ(draws_of(frame), expected);
+  expect_covering_cut(fx.tree, frame, camera);
+}
+
+TEST(Selection, NodesBehindTheCameraAreCulled) {
+  Fixture fx(3);
+  fx.settle_at(front(200.0f));
+  const FrameResult& away = fx.streaming->update(look(glm::vec3(32, 32, 264), glm::vec3(32, 32, 1000)));
+  EXPECT_EQ(away.stats.visited, 1u);
+  EXPECT_EQ(away.stats.culled, 1u);
+  EXPECT_EQ(away.stats.wanted, 0u);
+  EXPECT_TRUE(away.draws.empty());
+
+  // From the centre looking along +x, the four depth-1 nodes with x < 32 are behind the near plane.
+  const FrameResult& half = fx.settle_at(look(glm::vec3(32, 32, 32), glm::vec3(100, 32, 32)));
+  EXPECT_GE(half.stats.culled, 4u);
+  for (const DrawItem& d : half.draws)
+    EXPECT_GT(fx.tree.manifest.nodes[d.node].bounds.max[0], 32.0f) << fx.tree.manifest.nodes[d.node].path;
+}
+
+TEST(Selection, DistanceModeUsesPerDepthThresholds) {
+  StreamingOptions options;
+  options.mode = SelectionMode::distance;
+  options.distance_thresholds = {300.0, 100.0};
+  Fixture fx(3, options);
+  // Root: 1468 >= 4·300 -> its coarse LOD; 450 -> finest (below 2·300).
+  EXPECT_EQ(draws_of(fx.settle_at(front(1468.0f))), (std::map<std::uint32_t, std::uint32_t>{{0, 1}}));
+  EXPECT_EQ(draws_of(fx.settle_at(front(450.0f))), (std::map<std::uint32_t, std::uint32_t>{{0, 0}}));
+  // 180 < 300 refines the root; depth-1 nodes at 180 (z upper half) draw LOD 0, at 212 LOD 1.
+  const FrameResult& frame = fx.settle_at(front(180.0f));
+  ASSERT_EQ(frame.draws.size(), 8u);
+  for (const DrawItem& d : frame.draws) {
+    const bool near_half = fx.tree.manifest.nodes[d.node].cell.min[2] >= 32.0f;
+    EXPECT_EQ(d.lod, near_half ? 0u : 1u) << fx.tree.manifest.nodes[d.node].path;
+  }
+}
+
+// --- paging -----------------------------------------------------------------------------------
+
+TEST(Paging, RootCoarsestLodIsRequestedFirstAndPinned) {
+  StreamingOptions options;
+  options.max_loads_in_flight = 1;
+  Fixture fx(3, options);
+  const FrameResult& first = fx.streaming->update(front(100.0f));
+  EXPECT_TRUE(first.draws.empty());  // nothing resident yet: the only frame with holes
+  EXPECT_GT(first.stats.holes, 0u);
+  EXPECT_EQ(first.stats.loads_issued, 1u);
+  fx.executor->run_pending();
+  EXPECT_EQ(fx.tree.source->total_reads(), 1u);
+  EXPECT_EQ(fx.tree.source->read_count("lod1.bin"), 1u);
+
+  const FrameResult& second = fx.streaming->update(front(100.0f));
+  EXPECT_EQ(second.stats.loads_completed, 1u);
+  EXPECT_EQ(second.stats.holes, 0u);
+  ASSERT_EQ(second.draws.size(), 1u);  // the root stands in for all 64 wanted leaves
+  EXPECT_EQ(second.draws[0].node, 0u);
+  EXPECT_TRUE(second.draws[0].is_fallback);
+  EXPECT_EQ(second.stats.cache_misses, 64u);
+  EXPECT_EQ(second.stats.waiting_on_io, 0u);
+
+  // Pinned: however tight the budget gets elsewhere, it stays.
+  fx.settle_at(front(100.0f));
+  fx.settle_at(look(glm::vec3(32, 32, 264), glm::vec3(32, 32, 1000)));
+  EXPECT_TRUE(fx.streaming->is_resident(0, 1));
+}
+
+TEST(Paging, ResidentBytesNeverExceedABudgetSmallerThanTheCut) {
+  StreamingOptions options;
+  options.max_resident_bytes = 30000;  // the 64-leaf cut needs 64 · 1560 = 99840
+  Fixture fx(3, options);
+  const Camera camera = front(100.0f);
+  std::uint32_t fallbacks = 0;
+  for (int i = 0; i < 40; ++i) {
+    const FrameResult& frame = fx.streaming->update(camera);
+    EXPECT_LE(frame.stats.resident_bytes, options.max_resident_bytes);
+    EXPECT_LE(frame.stats.resident_bytes + frame.stats.reserved_bytes, options.max_resident_bytes);
+    if (i > 0) {
+      EXPECT_EQ(frame.stats.holes, 0u);
+      expect_covering_cut(fx.tree, frame, camera);
+    }
+    fallbacks += frame.stats.fallbacks;
+    fx.executor->run_pending();
+  }
+  EXPECT_GT(fallbacks, 0u);  // while the cut loaded
+  // The target was relaxed until the cut fits half the budget: the 8 depth-1 nodes at LOD 0
+  // (8 · 1560 bytes), all drawn as wanted.
+  const FrameResult& last = fx.streaming->update(camera);
+  EXPECT_GT(last.stats.coarsening, 1.0f);
+  EXPECT_EQ(last.stats.drawn_nodes, 8u);
+  for (const DrawItem& d : last.draws) EXPECT_EQ(d.depth, 1u);
+  EXPECT_LE(last.stats.wanted_bytes, options.max_resident_bytes / 2);
+  EXPECT_EQ(last.stats.fallbacks, 0u);
+  EXPECT_EQ(last.stats.cache_misses, 0u);
+  expect_covering_cut(fx.tree, last, camera);
+}
+
+TEST(Paging, BudgetForTheWholeCutShowsFallbacksButNeverExceedsIt) {
+  StreamingOptions options;
+  options.max_resident_bytes = 20000;
+  options.max_cut_fraction = 1.0;
+  Fixture fx(3, options);
+  const Camera camera = front(100.0f);
+  for (int i = 0; i < 40; ++i) {
+    const FrameResult& frame = fx.streaming->update(camera);
+    EXPECT_LE(frame.stats.resident_bytes + frame.stats.reserved_bytes, options.max_resident_bytes);
+    if (i > 0) expect_covering_cut(fx.tree, frame, camera);
+    fx.executor->run_pending();
+  }
+  const FrameResult& last = fx.streaming->update(camera);
+  EXPECT_LE(last.stats.wanted_bytes, options.max_resident_bytes);
+  EXPECT_EQ(last.stats.holes, 0u);
+}
+
+TEST(Paging, NothingDrawnIsEvicted) {
+  StreamingOptions options;
+  options.max_resident_bytes = 40000;
+  Fixture fx(4, options);
+  for (int i = 0; i < 60; ++i) {
+    const float angle = 0.15f * static_cast<float>(i);
+    const Camera camera = look(kCenter + glm::vec3(std::cos(angle), 0.3f, std::sin(angle)) * 90.0f, kCenter);
+    const FrameResult& frame = fx.streaming->update(camera);
+    for (const DrawItem& d : frame.draws)
+      EXPECT_TRUE(fx.streaming->is_resident(d.node, d.lod)) << "frame " << i << " node " << d.node;
+    EXPECT_LE(frame.stats.resident_bytes, options.max_resident_bytes);
+    if (i > 0) expect_covering_cut(fx.tree, frame, camera);
+    if (i % 2 == 0) fx.executor->run_pending();  // loads arrive every other frame
+  }
+}
+
+TEST(Paging, ReleasedEntriesComeBackWithoutIoAsSecondChanceHits) {
+  Fixture fx(3);
+  const FrameResult& near = fx.settle_at(front(100.0f));
+  ASSERT_EQ(near.stats.drawn_nodes, 64u);
+  fx.settle_at(front(1468.0f));  // only the root now; the 64 leaves go to the free list
+  const std::uint64_t reads = fx.tree.source->total_reads();
+  const FrameResult& back = fx.streaming->update(front(100.0f));
+  EXPECT_EQ(back.stats.second_chance_hits, 64u);
+  EXPECT_EQ(back.stats.cache_hits, 64u);
+  EXPECT_EQ(back.stats.cache_misses, 0u);
+  EXPECT_EQ(back.stats.fallbacks, 0u);
+  EXPECT_EQ(back.stats.drawn_nodes, 64u);
+  fx.executor->run_pending();
+  EXPECT_EQ(fx.tree.source->total_reads(), reads);
+}
+
+TEST(Paging, FreeListEntriesAreReclaimedOnlyWhenALoadNeedsTheMemory) {
+  StreamingOptions options;
+  // Each corner's cut takes 285480 bytes and they share about 47K: one fits, both do not.
+  options.max_resident_bytes = 400000;
+  options.max_cut_fraction = 0.75;
+  options.prefetch = false;
+  Fixture fx(4, options);
+  const Camera corner_a = look(glm::vec3(-20, -20, -20), glm::vec3(0, 0, 0));
+  const Camera corner_b = look(glm::vec3(84, 84, 84), glm::vec3(64, 64, 64));
+  const FrameResult& a = fx.settle_at(corner_a);
+  ASSERT_EQ(a.stats.fallbacks, 0u);
+  ASSERT_EQ(a.stats.coarsening, 1.0f);
+  const std::vector<DrawItem> a_draws = a.draws;
+  const FrameResult& b = fx.settle_at(corner_b);
+  EXPECT_EQ(b.stats.fallbacks, 0u);
+  EXPECT_LE(b.stats.resident_bytes, options.max_resident_bytes);
+
+  std::vector<std::string> reclaimed;
+  std::uint32_t kept = 0;
+  for (const DrawItem& d : a_draws) {
+    if (fx.streaming->is_resident(d.node, d.lod)) ++kept;
+    else reclaimed.push_back(fx.tree.manifest.nodes[d.node].lods[d.lod].file);
+  }
+  EXPECT_GT(kept, 0u);  // memory B did not need: still there
+  ASSERT_FALSE(reclaimed.empty());  // memory B needed: reused
+
+  const FrameResult& again = fx.streaming->update(corner_a);
+  EXPECT_EQ(again.stats.cache_misses, reclaimed.size());
+  EXPECT_GT(again.stats.second_chance_hits, 0u);
+  fx.settle_at(corner_a);
+  for (const std::string& file : reclaimed) EXPECT_EQ(fx.tree.source->read_count(file), 2u) << file;
+}
+
+TEST(Paging, QueuedLoadsAreCancelledWhenTheCameraTurnsAway) {
+  StreamingOptions options;
+  options.max_loads_in_flight = 4;
+  options.prefetch = false;
+  Fixture fx(3, options);
+  fx.streaming->update(front(100.0f));  // the root and 3 leaves
+  fx.executor->run_pending();
+  const FrameResult& queued = fx.streaming->update(front(100.0f));
+  EXPECT_EQ(queued.stats.loads_completed, 4u);
+  EXPECT_EQ(queued.stats.loads_issued, 4u);
+  EXPECT_EQ(queued.stats.loads_in_flight, 4u);
+  // Turn away before the loader ran: all four are dropped, nothing is read.
+  const std::uint64_t reads = fx.tree.source->total_reads();
+  const FrameResult& away = fx.streaming->update(look(glm::vec3(32, 32, 164), glm::vec3(32, 32, 1000)));
+  EXPECT_EQ(away.stats.loads_cancelled, 4u);
+  EXPECT_EQ(away.stats.loads_in_flight, 0u);
+  fx.executor->run_pending();
+  EXPECT_EQ(fx.tree.source->total_reads(), reads);
+}
+
+TEST(Paging, NeededLoadsComeBeforePrefetchesAndHigherPriorityFirst) {
+  StreamingOptions options;
+  options.max_loads_in_flight = 1;
+  Fixture fx(3, options);
+  fx.streaming->update(front(100.0f));
+  fx.executor->run_pending();  // root
+  fx.streaming->update(front(100.0f));
+  fx.executor->run_pending();
+  fx.streaming->update(front(100.0f));
+  // One leaf loaded: a wanted one (prefetches never outrank needed loads), nearest first (z high).
+  std::uint32_t loaded = 0;
+  for (std::uint32_t n = 0; n < fx.tree.manifest.nodes.size(); ++n) {
+    if (!fx.streaming->is_resident(n, 0)) continue;
+    ++loaded;
+    EXPECT_TRUE(fx.tree.manifest.nodes[n].is_leaf());
+    EXPECT_EQ(fx.tree.manifest.nodes[n].cell.max[2], 64.0f) << fx.tree.manifest.nodes[n].path;
+  }
+  EXPECT_EQ(loaded, 1u);
+}
+
+TEST(Paging, CorruptNodeFileIsLoggedOnceAndAnAncestorIsDrawnForever) {
+  Fixture fx(3);
+  const std::uint32_t broken = fx.tree.node_at("7/7");
+  // LOD 0 fails its checksum, LOD 1 is missing (replaced by a truncated file).
+  std::vector<std::byte> bytes = encode_node_file(testing::strip_mesh(fx.tree.manifest.nodes[broken].bounds, 64));
+  bytes[bytes.size() / 2] ^= std::byte{0x40};
+  fx.tree.source->put(fx.tree.manifest.nodes[broken].lods[0].file, bytes);
+  fx.tree.source->put(fx.tree.manifest.nodes[broken].lods[1].file, std::vector<std::byte>(10));
+
+  const Camera camera = front(100.0f);
+  for (int i = 0; i < 30; ++i) {
+    const FrameResult& frame = fx.streaming->update(camera);
+    if (i > 0) expect_covering_cut(fx.tree, frame, camera);
+    fx.executor->run_pending();
+  }
+  const FrameResult& frame = fx.streaming->update(camera);
+  EXPECT_TRUE(fx.streaming->is_bad(broken, 0));
+  EXPECT_TRUE(fx.streaming->is_bad(broken, 1));
+  ASSERT_EQ(fx.log.size(), 2u);  // one line per bad LOD, however many frames pass
+  EXPECT_NE(fx.log[0].find("7/7"), std::string::npos) << fx.log[0];
+  // The nearest ancestor, node "7", was loaded for it and stands in; its other children are
+  // drawn by it too, everything else as wanted.
+  const std::uint32_t parent = fx.tree.node_at("7");
+  std::map<std::uint32_t, std::uint32_t> draws = draws_of(frame);
+  EXPECT_EQ(draws.count(broken), 0u);
+  ASSERT_EQ(draws.count(parent), 1u);
+  EXPECT_EQ(frame.stats.drawn_nodes, 64u - 8u + 1u);
+  EXPECT_EQ(frame.stats.fallbacks, 1u);
+  expect_covering_cut(fx.tree, frame, camera);
+}
+
+TEST(Paging, NoHolesWhileLoadsTrickleInAlongAPath) {
+  StreamingOptions options;
+  options.max_loads_in_flight = 2;
+  options.max_resident_bytes = 60000;
+  Fixture fx(4, options);
+  for (int i = 0; i < 80; ++i) {
+    const float t = static_cast<float>(i) / 80.0f;
+    const Camera camera = look(glm::vec3(32.0f + 60.0f * std::sin(6.0f * t), 40.0f, 400.0f - 390.0f * t), kCenter);
+    const FrameResult& frame = fx.streaming->update(camera);
+    if (i > 0) {
+      EXPECT_EQ(frame.stats.holes, 0u) << "frame " << i;
+      expect_covering_cut(fx.tree, frame, camera);
+    }
+    if (i % 3 == 0) fx.executor->run_pending();
+  }
+}
+
+TEST(Paging, PrefetchMakesAnApproachCheaper) {
+  auto misses_along_approach = [](bool prefetch) {
+    StreamingOptions options;
+    options.prefetch = prefetch;
+    options.max_loads_in_flight = 4;
+    Fixture fx(4, options);
+    std::uint64_t misses = 0;
+    for (int i = 0; i < 60; ++i) {
+      const FrameResult& frame = fx.streaming->update(front(1500.0f - 24.0f * static_cast<float>(i)));
+      if (i > 0) misses += frame.stats.cache_misses;
+      fx.executor->run_pending();
+    }
+    return misses;
+  };
+  const std::uint64_t with = misses_along_approach(true);
+  const std::uint64_t without = misses_along_approach(false);
+  EXPECT_LT(with, without);
+}
+
+TEST(Paging, PrefetchLoadsTheNeighboursOfTheCut) {
+  Fixture fx(3);
+  fx.settle_at(front(200.0f));  // cut: the 8 depth-1 nodes at LOD 0
+  EXPECT_TRUE(fx.streaming->is_resident(fx.tree.node_at("7"), 1));    // coarser step
+  EXPECT_TRUE(fx.streaming->is_resident(fx.tree.node_at("7/7"), 1));  // children's coarsest
+  StreamingOptions off;
+  off.prefetch = false;
+  Fixture without(3, off);
+  without.settle_at(front(200.0f));
+  EXPECT_FALSE(without.streaming->is_resident(without.tree.node_at("7"), 1));
+  EXPECT_FALSE(without.streaming->is_resident(without.tree.node_at("7/7"), 1));
+}
+
+TEST(Paging, ThreadPoolLoadsConvergeToTheReferenceCut) {
+  SyntheticTree tree = make_full_octree(4);
+  auto executor = std::make_shared<ThreadPoolExecutor>(2);
+  auto opened = StreamingTree::open(tree.manifest, tree.source, executor, StreamingOptions{});
+  ASSERT_TRUE(opened.ok()) << opened.status().message();
+  StreamingTree& streaming = *opened.value();
+  const Camera camera = look(glm::vec3(-30, 70, 110), kCenter);
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(10);
+  const FrameResult* frame = &streaming.update(camera);
+  while (std::chrono::steady_clock::now() < deadline &&
+         (frame->stats.loads_in_flight > 0 || frame->stats.loads_issued > 0 || frame->stats.loads_completed > 0)) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    frame = &streaming.update(camera);
+    EXPECT_EQ(frame->stats.holes, 0u);
+  }
+  std::map<std::uint32_t, std::uint32_t> expected;
+  testing::reference_cut(tree.manifest, camera, 2.0, 0, expected);
+  EXPECT_EQ(draws_of(*frame), expected);
+  expect_covering_cut(tree, *frame, camera);
+}
+
+TEST(Paging, TreeCanBeDestroyedWithLoadsStillPosted) {
+  SyntheticTree tree = make_full_octree(3);
+  auto executor = std::make_shared<SynchronousExecutor>();
+  {
+    auto opened = StreamingTree::open(tree.manifest, tree.source, executor, StreamingOptions{});
+    ASSERT_TRUE(opened.ok());
+    opened.value()->update(front(100.0f));
+  }
+  EXPECT_GT(executor->pending(), 0u);
+  executor->run_pending();  // the tasks own their queue; nothing is loaded after shutdown
+  EXPECT_EQ(tree.source->total_reads(), 0u);
+}
+
+// --- open -------------------------------------------------------------------------------------
+
+TEST(Open, RejectsMeaninglessOptions) {
+  SyntheticTree tree = make_full_octree(2);
+  auto executor = std::make_shared<SynchronousExecutor>();
+  auto open_with = [&](StreamingOptions o) {
+    return StreamingTree::open(tree.manifest, tree.source, executor, std::move(o)).status().code();
+  };
+  StreamingOptions tiny;
+  tiny.max_resident_bytes = 100;  // the root's coarsest LOD is 408 bytes
+  EXPECT_EQ(open_with(tiny), ErrorCode::usage);
+  StreamingOptions distance;
+  distance.mode = SelectionMode::distance;
+  EXPECT_EQ(open_with(distance), ErrorCode::usage);
+  StreamingOptions sse;
+  sse.target_sse_pixels = 0;
+  EXPECT_EQ(open_with(sse), ErrorCode::usage);
+  EXPECT_EQ(StreamingTree::open(Manifest{}, tree.source, executor, {}).status().code(), ErrorCode::bad_input);
+}
+
+}  // namespace
+}  // namespace octolod::runtime
