@@ -178,18 +178,15 @@ TEST(Soup, SplitWritesVertexAndTriangleFilesInFileOrder) {
 }
 
 // The seed's out-of-core passes with a tiny budget (hundreds of runs, multi-pass merges) write
-// exactly the bytes the in-core path and the in-memory dereference produce, in both orders and
-// for one or two threads: 300K triangles.
+// exactly the bytes the in-core path and the in-memory dereference produce: 300K triangles.
 TEST(Soup, OutOfCoreWithTinyBudgetIsBitIdenticalToInCore) {
   WorkDir dir;
   const GridMesh mesh = make_grid(500, 300);
   write_mesh(dir.file("grid.ply"), mesh);
-  for (const SoupOrder order : {SoupOrder::by_last_corner, SoupOrder::by_triangle}) {
-    const std::string expected =
-        as_string(dereference_in_memory(mesh.vertices, mesh.triangles, mesh.layout, order));
-    SoupOptions in_core = options_in(dir, 256u << 20);
-    in_core.order = order;
-    auto a = build_soup(dir.file("grid.ply"), in_core);
+  const std::string expected =
+      as_string(dereference_in_memory(mesh.vertices, mesh.triangles, mesh.layout));
+  {
+    auto a = build_soup(dir.file("grid.ply"), options_in(dir, 256u << 20));
     ASSERT_TRUE(a.ok()) << a.status().message();
     EXPECT_TRUE(a->in_core);
     EXPECT_EQ(a->triangle_count, 300001u);
@@ -197,14 +194,11 @@ TEST(Soup, OutOfCoreWithTinyBudgetIsBitIdenticalToInCore) {
     EXPECT_EQ(a->layout, mesh.layout);
     EXPECT_TRUE(read_bytes(a->soup.path()) == expected);
 
-    SoupOptions tiny = options_in(dir, kMinSoupBudget);
-    tiny.order = order;
-    tiny.threads = order == SoupOrder::by_triangle ? 1 : 2;
-    auto b = build_soup(dir.file("grid.ply"), tiny);
+    auto b = build_soup(dir.file("grid.ply"), options_in(dir, kMinSoupBudget));
     ASSERT_TRUE(b.ok()) << b.status().message();
     EXPECT_FALSE(b->in_core);
     EXPECT_TRUE(read_bytes(b->soup.path()) == expected);
-    ASSERT_EQ(b->sorts.size(), order == SoupOrder::by_triangle ? 4u : 3u);
+    ASSERT_EQ(b->sorts.size(), 3u);
     for (const SortStats& s : b->sorts) {
       EXPECT_FALSE(s.in_core);
       EXPECT_GT(s.runs, 50u);
@@ -216,20 +210,59 @@ TEST(Soup, OutOfCoreWithTinyBudgetIsBitIdenticalToInCore) {
   EXPECT_EQ(dir.work_file_count(), 0u);  // results destroyed: soups removed too
 }
 
-TEST(Soup, OutOfCoreForcedWithLargeBudgetMatchesInCore) {
+// Every path and order, one or two threads, budgets from the minimum up: the same bytes.
+TEST(Soup, EveryPathOrderAndThreadCountGivesTheSameBytes) {
   WorkDir dir;
   const GridMesh mesh = make_grid(120, 80);
   write_mesh(dir.file("grid.ply"), mesh);
+  for (const SoupOrder order : {SoupOrder::by_last_corner, SoupOrder::by_triangle}) {
+    const std::string expected =
+        as_string(dereference_in_memory(mesh.vertices, mesh.triangles, mesh.layout, order));
+    for (const std::uint64_t budget : {kMinSoupBudget, std::uint64_t{1} << 20}) {
+      for (const bool force : {false, true}) {
+        for (const unsigned threads : {1u, 2u}) {
+          SoupOptions options = options_in(dir, budget);
+          options.order = order;
+          options.force_out_of_core = force;
+          options.threads = threads;
+          auto r = build_soup(dir.file("grid.ply"), options);
+          ASSERT_TRUE(r.ok()) << r.status().message();
+          EXPECT_EQ(r->in_core, !force && budget > kMinSoupBudget);
+          EXPECT_TRUE(read_bytes(r->soup.path()) == expected)
+              << "budget " << budget << " force " << force << " threads " << threads;
+          EXPECT_GE(r->seconds.total, r->seconds.sort);
+        }
+      }
+    }
+  }
+}
+
+TEST(Soup, SinkReceivesTheSoupInsteadOfAFile) {
+  WorkDir dir;
+  const GridMesh mesh = make_grid(60, 40);
+  write_mesh(dir.file("grid.ply"), mesh);
   const std::string expected =
       as_string(dereference_in_memory(mesh.vertices, mesh.triangles, mesh.layout));
-  SoupOptions options = options_in(dir, 1u << 20);
   for (const bool force : {false, true}) {
+    std::string received;
+    SoupOptions options = options_in(dir, kMinSoupBudget * 4);
     options.force_out_of_core = force;
+    options.sink = [&](std::span<const std::byte> records) {
+      EXPECT_EQ(records.size() % soup_record_bytes(mesh.layout), 0u);
+      received.append(reinterpret_cast<const char*>(records.data()), records.size());
+      return Status{};
+    };
     auto r = build_soup(dir.file("grid.ply"), options);
     ASSERT_TRUE(r.ok()) << r.status().message();
-    EXPECT_EQ(r->in_core, !force);
-    EXPECT_TRUE(read_bytes(r->soup.path()) == expected);
-    EXPECT_GE(r->seconds.total, r->seconds.sort);
+    EXPECT_TRUE(r->soup.empty());
+    EXPECT_TRUE(received == expected);
+    EXPECT_EQ(dir.work_file_count(), 0u);
+    // A sink's error ends the stage with it, and cleans up.
+    options.sink = [](std::span<const std::byte>) { return bad_input_error("sink says no"); };
+    auto failed = build_soup(dir.file("grid.ply"), options);
+    ASSERT_FALSE(failed.ok());
+    EXPECT_EQ(failed.status().message(), "sink says no");
+    EXPECT_EQ(dir.work_file_count(), 0u);
   }
 }
 

@@ -85,10 +85,13 @@ Status dereference_pass(int corner, VertexLayout layout, RecordSorter& sorted,
 }
 
 Status dereference_in_core(VertexLayout layout, std::span<const float> vertices,
-                           RecordSorter& sorted, RecordWriter& soup) {
+                           RecordSorter& sorted, std::span<std::byte> scratch,
+                           const RecordSink& sink) {
   const std::size_t floats = layout.floats();
   const std::size_t vertex_bytes = layout.bytes();
   const std::size_t out_bytes = soup_record_bytes(layout);
+  const std::size_t batch = scratch.size() / out_bytes;
+  assert(batch >= 1 && "dereference_in_core: scratch must hold a soup record");
   assert(sorted.record_bytes() == sizeof(TriangleRecord));
   for (;;) {
     auto in = sorted.next();
@@ -97,10 +100,8 @@ Status dereference_in_core(VertexLayout layout, std::span<const float> vertices,
     const std::byte* rec = in->data();
     std::size_t left = in->size() / sizeof(TriangleRecord);
     while (left > 0) {
-      auto space = soup.reserve(left);
-      if (!space.ok()) return space.status();
-      const std::size_t n = space->size() / out_bytes;
-      std::byte* out = space->data();
+      const std::size_t n = std::min(left, batch);
+      std::byte* out = scratch.data();
       for (std::size_t i = 0; i < n; ++i, rec += sizeof(TriangleRecord), out += out_bytes) {
         for (std::size_t c = 0; c < 3; ++c) {
           const std::size_t id = load_u32(rec + 4 * c);
@@ -108,7 +109,7 @@ Status dereference_in_core(VertexLayout layout, std::span<const float> vertices,
         }
         std::memcpy(out + 3 * vertex_bytes, rec + 12, 4);
       }
-      soup.commit(n);
+      OCTOLOD_RETURN_IF_ERROR(sink(scratch.first(n * out_bytes)));
       left -= n;
     }
   }

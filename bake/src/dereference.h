@@ -29,8 +29,9 @@ constexpr std::size_t working_vertex_id_offset(VertexLayout layout, int corner) 
   return static_cast<std::size_t>(corner) * layout.bytes();
 }
 
-// Sort key of SoupOrder::by_last_corner for working records with two corners filled (and for
-// TriangleRecords, with filled = 0 and corner 2's id at byte 8): (vertex id << 32) | triangle id.
+// Sort key of SoupOrder::by_last_corner for working records with two corners filled:
+// (vertex id of corner 2 << 32) | triangle id. (Input already in triangle order, as in the
+// in-core path, needs only corner 2's id: the sort is stable.)
 SortKeyFn last_corner_key(VertexLayout layout, int filled);
 
 // Receives consecutive output records; the span is valid during the call only.
@@ -45,9 +46,11 @@ Status dereference_pass(int corner, VertexLayout layout, RecordSorter& sorted,
                         const RecordSink& sink);
 
 // In-core: `sorted` yields TriangleRecords in output order; each becomes a soup record with its
-// three corners copied from `vertices` (vertex_count * layout.floats() floats) and is written to
-// `soup`. Ids were checked against the vertex count by the PLY reader.
+// three corners copied from `vertices` (vertex_count * layout.floats() floats), handed to `sink`
+// in batches built in `scratch` (at least one soup record). Ids were checked against the vertex
+// count by the PLY reader.
 Status dereference_in_core(VertexLayout layout, std::span<const float> vertices,
-                           RecordSorter& sorted, RecordWriter& soup);
+                           RecordSorter& sorted, std::span<std::byte> scratch,
+                           const RecordSink& sink);
 
 }  // namespace octolod::bake

@@ -92,14 +92,17 @@ class SoupBuilder {
     const std::size_t floats = layout_.floats();
     const std::uint64_t vertex_array_bytes = vertex_count * layout_.bytes();
     auto vertices = std::make_unique_for_overwrite<float[]>(vertex_count * floats);
-    // Budget: vertex array, PLY reader, triangle batch, soup writer; the sort gets the rest
-    // (at least 5/16 of the budget minus the reader's file buffer, since the array is <= 1/2).
+    // Budget: the vertex array and the sort throughout, plus the PLY reader and the triangle
+    // batch while splitting, then the output batch and the soup writer. The array is at most
+    // half the budget, so the sort gets at least 1/4 of it minus the reader's file buffer.
     const std::uint64_t sort_budget =
-        options_.memory_budget_bytes - vertex_array_bytes - 3 * io_ - kPlyFileBuffer;
+        options_.memory_budget_bytes - vertex_array_bytes - 2 * io_ - kPlyFileBuffer;
     auto sorter = RecordSorter::create(
         sizeof(TriangleRecord),
         options_.order == SoupOrder::by_last_corner
-            ? last_corner_key(layout_, 0)
+            // The input is in triangle order already: a stable sort by corner 2 is enough.
+            ? sort_key_u32_at(offsetof(TriangleRecord, corner) + 2 * sizeof(VertexId),
+                              sizeof(TriangleRecord))
             : sort_key_u32_at(offsetof(TriangleRecord, triangle), sizeof(TriangleRecord)),
         sort_options(sort_budget));
     if (!sorter.ok()) return sorter.status();
@@ -117,12 +120,12 @@ class SoupBuilder {
     OCTOLOD_RETURN_IF_ERROR(triangles.finish());
     progress("dereference", 0, result_.triangle_count);
 
-    soup_file_ = make_temp_file(options_.work_dir, "soup");
-    auto soup = RecordWriter::create(soup_file_.path(), soup_record_bytes(layout_), io_);
-    if (!soup.ok()) return soup.status();
+    OCTOLOD_RETURN_IF_ERROR(open_output());
+    auto scratch = std::make_unique_for_overwrite<std::byte[]>(io_);
     OCTOLOD_RETURN_IF_ERROR(dereference_in_core(
-        layout_, std::span<const float>(vertices.get(), vertex_count * floats), triangles, soup.value()));
-    OCTOLOD_RETURN_IF_ERROR(soup->finish());
+        layout_, std::span<const float>(vertices.get(), vertex_count * floats), triangles,
+        std::span<std::byte>(scratch.get(), io_), output_));
+    OCTOLOD_RETURN_IF_ERROR(finish_output());
     progress("dereference", result_.triangle_count, result_.triangle_count);
     result_.sorts.push_back(triangles.stats());
     return {};
@@ -156,16 +159,8 @@ class SoupBuilder {
     }
     OCTOLOD_RETURN_IF_ERROR(current->finish());
 
-    // The soup writer's buffer exists only once the second sort is gone (last pass, or the
-    // by-triangle sort's output).
-    std::optional<RecordWriter> soup;
-    const auto open_soup = [&]() -> Status {
-      soup_file_ = make_temp_file(options_.work_dir, "soup");
-      auto writer = RecordWriter::create(soup_file_.path(), soup_record_bytes(layout_), io_);
-      if (!writer.ok()) return writer.status();
-      soup.emplace(std::move(writer).value());
-      return {};
-    };
+    // The output (soup writer) exists only once the second sort is gone: in the last pass, or
+    // for the by-triangle sort's output.
     auto scratch = std::make_unique_for_overwrite<std::byte[]>(io_);
     static constexpr const char* kPassNames[3] = {"dereference 0", "dereference 1",
                                                   "dereference 2"};
@@ -184,7 +179,7 @@ class SoupBuilder {
       } else if (options_.order == SoupOrder::by_triangle) {
         key = sort_key_u32_at(soup_triangle_id_offset(layout_), out_bytes);
       }
-      if (!key) OCTOLOD_RETURN_IF_ERROR(open_soup());
+      if (!key) OCTOLOD_RETURN_IF_ERROR(open_output());
       if (key) {
         auto created = RecordSorter::create(out_bytes, std::move(key), sort_options(sort_budget));
         if (!created.ok()) return created.status();
@@ -196,7 +191,7 @@ class SoupBuilder {
         done += records.size() / out_bytes;
         progress(stage, done, result_.triangle_count);
         if (next) return next->push(records);
-        return soup->append(records.data(), records.size() / out_bytes);
+        return output_(records);
       };
       auto vertices = RecordReader::open(vertex_file.path(), layout_.bytes(), io_);
       if (!vertices.ok()) return vertices.status();
@@ -210,17 +205,41 @@ class SoupBuilder {
     }
     vertex_file.remove();
     if (current) {  // SoupOrder::by_triangle: the soup sorted by triangle id
-      OCTOLOD_RETURN_IF_ERROR(open_soup());
+      OCTOLOD_RETURN_IF_ERROR(open_output());
+      std::uint64_t done = 0;
       for (;;) {
         auto block = current->next();
         if (!block.ok()) return block.status();
         if (block->empty()) break;
-        OCTOLOD_RETURN_IF_ERROR(soup->append(block->data(), block->size() / soup->record_bytes()));
-        progress("order", soup->records_written(), result_.triangle_count);
+        OCTOLOD_RETURN_IF_ERROR(output_(block.value()));
+        done += block->size() / soup_record_bytes(layout_);
+        progress("order", done, result_.triangle_count);
       }
       result_.sorts.push_back(current->stats());
     }
-    return soup->finish();
+    return finish_output();
+  }
+
+  // The soup's destination: SoupOptions::sink, or a new soup file through a writer of io_ bytes.
+  Status open_output() {
+    if (options_.sink) {
+      output_ = options_.sink;
+      return {};
+    }
+    soup_file_ = make_temp_file(options_.work_dir, "soup");
+    auto writer = RecordWriter::create(soup_file_.path(), soup_record_bytes(layout_), io_);
+    if (!writer.ok()) return writer.status();
+    soup_writer_.emplace(std::move(writer).value());
+    output_ = [this](std::span<const std::byte> records) {
+      return soup_writer_->append(records.data(), records.size() / soup_writer_->record_bytes());
+    };
+    return {};
+  }
+  Status finish_output() {
+    if (!soup_writer_) return {};
+    Status status = soup_writer_->finish();
+    soup_writer_.reset();
+    return status;
   }
 
   const SoupOptions& options_;
@@ -231,6 +250,8 @@ class SoupBuilder {
   double split_wall_ = 0;
   double split_sort_seconds_ = 0;
   TempFile soup_file_;
+  std::optional<RecordWriter> soup_writer_;
+  RecordSink output_;
   SoupResult result_;
 };
 

@@ -98,6 +98,11 @@ struct SoupOptions {
   // Take the out-of-core three-pass path even when the vertices would fit (tests, benchmarks).
   bool force_out_of_core = false;
   SoupProgressFn progress;
+  // When set, the soup records are handed to `sink` in order, in batches of whole records
+  // (valid during the call only), instead of being written to a file: a later stage can start
+  // its own sort without the soup ever touching the disk. SoupResult::soup is then empty. An
+  // error the sink returns ends build_soup with that error. Called from the calling thread.
+  std::function<Status(std::span<const std::byte> records)> sink;
 };
 
 inline constexpr std::uint64_t kMinSoupBudget = 256 * 1024;
@@ -110,7 +115,8 @@ struct SoupStageSeconds {
 };
 
 struct SoupResult {
-  TempFile soup;  // the soup file; removed when this result is destroyed unless released
+  TempFile soup;  // the soup file (empty with SoupOptions::sink); removed when this result is
+                  // destroyed unless released
   VertexLayout layout;
   std::uint64_t vertex_count = 0;
   std::uint64_t triangle_count = 0;
