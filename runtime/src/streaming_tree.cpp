@@ -361,10 +361,7 @@ void StreamingTree::Impl::collect_prefetch(const SelectionView& view, const Came
     } else {
       for (std::uint32_t i = 0; i < n.child_count; ++i) {
         const std::uint32_t child = tree.children[n.child_begin + i];
-        const LayoutNode& c = tree.nodes[child];
-        if (c.lod_count == 0) continue;
-        if (classify_box(view.frustum, c.center, c.half) == Containment::outside) continue;
-        consider_prefetch(tree.slot_end(child) - 1, w.priority);
+        if (tree.nodes[child].lod_count > 0) consider_prefetch(tree.slot_end(child) - 1, w.priority);
       }
     }
     if (w.slot + 1 < tree.slot_end(w.node)) {
