@@ -4,7 +4,8 @@
 //
 //   soup_bench [--triangles 1M] [--memory 64M] [--threads 2] [--shape terrain]
 //              [--attributes normal,color,uv] [--order last|triangle] [--out-of-core]
-//              [--work DIR] [--repeat N]
+//              [--work DIR] [--repeat N] [--sink]
+// --sink hands the soup to a callback (as the octree stage can) instead of writing the file.
 // The PLY is cached in the work directory as soup-bench-<shape>-<triangles>-<mask>.ply.
 #include <sys/resource.h>
 #include <sys/wait.h>
@@ -13,6 +14,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <span>
 #include <string>
 #include <string_view>
 
@@ -22,6 +24,8 @@
 namespace {
 
 using namespace octolod;
+
+std::uint64_t sink_bytes = 0;  // soup bytes handed to the --sink callback
 
 double peak_rss_mib() {
   rusage usage{};
@@ -109,6 +113,12 @@ int main(int argc, char** argv) {
     } else if (arg == "--out-of-core") {
       options.force_out_of_core = true;
       continue;
+    } else if (arg == "--sink") {
+      options.sink = [](std::span<const std::byte> records) {
+        sink_bytes += records.size();
+        return Status{};
+      };
+      continue;
     } else {
       return fail("unknown or incomplete argument '" + std::string(arg) + "'");
     }
@@ -133,12 +143,15 @@ int main(int argc, char** argv) {
     const bake::SoupResult& s = result.value();
     std::printf(
         "%s: %llu triangles, %llu vertices, layout %s: %.3f s total = split %.3f + sort %.3f + "
-        "dereference %.3f; %.2f M triangles/s; soup %.1f MiB\n",
+        "dereference %.3f; %.2f M triangles/s; soup %.1f MiB%s\n",
         s.in_core ? "in core" : "out of core", static_cast<unsigned long long>(s.triangle_count),
         static_cast<unsigned long long>(s.vertex_count), s.layout.describe().c_str(),
         s.seconds.total, s.seconds.split, s.seconds.sort, s.seconds.dereference,
         static_cast<double>(s.triangle_count) / s.seconds.total / 1e6,
-        static_cast<double>(std::filesystem::file_size(s.soup.path())) / (1 << 20));
+        static_cast<double>(s.soup.empty() ? sink_bytes : std::filesystem::file_size(s.soup.path())) /
+            (1 << 20),
+        s.soup.empty() ? " (sink)" : "");
+    sink_bytes = 0;
     for (const bake::SortStats& st : s.sorts) {
       std::printf(
           "  sort: %llu records, %s, %llu runs, %u merge passes, fan-in %u, %.1f MiB written, "

@@ -76,20 +76,48 @@ void radix_sort(std::uint64_t*& keys, std::uint32_t*& order, std::uint64_t*& key
   }
 }
 
-// The records of one sorted run in memory: the run buffer, the keys and the sorted order, as
-// one or two sorted halves (two threads) read out by a two-way merge.
-struct RunBuffer {
+// A range of the run buffer, sorted: one or two sorted halves (sorted on two threads) read out
+// in order by a two-way merge.
+struct SortedRun {
+  const std::byte* records = nullptr;  // first record of the range; order[] indexes from here
   std::size_t record_bytes = 0;
-  std::size_t capacity = 0;  // records
-  std::size_t count = 0;     // records held
-  std::unique_ptr<std::byte[]> records;
-  std::unique_ptr<std::uint64_t[]> key_storage;    // 2 * capacity
-  std::unique_ptr<std::uint32_t[]> order_storage;  // 2 * capacity
-  // Sorted halves [0, half) and [half, count) after sort(): keys and record indices.
   std::uint64_t* keys[2] = {nullptr, nullptr};
   std::uint32_t* order[2] = {nullptr, nullptr};
   std::size_t size[2] = {0, 0};
   std::size_t cursor[2] = {0, 0};  // read position in each half
+
+  bool exhausted() const { return cursor[0] == size[0] && cursor[1] == size[1]; }
+
+  // Copies up to `max` records in sorted order to `out`; returns how many. Ties between the
+  // halves go to the first half (earlier input), which keeps the sort stable.
+  std::size_t emit(std::byte* out, std::size_t max) {
+    std::size_t n = 0;
+    while (n < max) {
+      int h;
+      if (cursor[0] == size[0]) {
+        if (cursor[1] == size[1]) break;
+        h = 1;
+      } else if (cursor[1] == size[1]) {
+        h = 0;
+      } else {
+        h = keys[1][cursor[1]] < keys[0][cursor[0]] ? 1 : 0;
+      }
+      std::memcpy(out + n * record_bytes,
+                  records + std::size_t{order[h][cursor[h]]} * record_bytes, record_bytes);
+      ++cursor[h];
+      ++n;
+    }
+    return n;
+  }
+};
+
+// The run buffer: records, their keys and sort order (each with radix scratch space).
+struct RunBuffer {
+  std::size_t record_bytes = 0;
+  std::size_t capacity = 0;  // records
+  std::unique_ptr<std::byte[]> records;
+  std::unique_ptr<std::uint64_t[]> key_storage;    // 2 * capacity
+  std::unique_ptr<std::uint32_t[]> order_storage;  // 2 * capacity
 
   void allocate(std::size_t rb, std::size_t cap) {
     record_bytes = rb;
@@ -102,61 +130,43 @@ struct RunBuffer {
     records.reset();
     key_storage.reset();
     order_storage.reset();
-    capacity = count = 0;
+    capacity = 0;
   }
+  std::byte* record(std::size_t i) { return records.get() + i * record_bytes; }
 
-  void sort(const SortKeyFn& key_fn, unsigned threads) {
-    size[0] = size[1] = cursor[0] = cursor[1] = 0;
-    if (count == 0) return;
-    std::uint64_t* k = key_storage.get();
-    std::uint32_t* o = order_storage.get();
-    key_fn(std::span<const std::byte>(records.get(), count * record_bytes),
+  // Sorts records [begin, begin + count), as two halves on two threads when `two_threads` and
+  // the range is large. Touches only that range's slots of the key and order arrays, so two
+  // disjoint ranges can be sorted concurrently.
+  SortedRun sort(std::size_t begin, std::size_t count, const SortKeyFn& key_fn,
+                 bool two_threads) {
+    SortedRun run;
+    run.records = record(begin);
+    run.record_bytes = record_bytes;
+    if (count == 0) return run;
+    std::uint64_t* k = key_storage.get() + begin;
+    std::uint32_t* o = order_storage.get() + begin;
+    key_fn(std::span<const std::byte>(run.records, count * record_bytes),
            std::span<std::uint64_t>(k, count));
     for (std::size_t i = 0; i < count; ++i) o[i] = static_cast<std::uint32_t>(i);
-    const std::size_t half = (threads >= 2 && count >= kParallelSortMin) ? count / 2 : count;
-    size[0] = half;
-    size[1] = count - half;
-    cursor[0] = cursor[1] = 0;
+    const std::size_t half = (two_threads && count >= kParallelSortMin) ? count / 2 : count;
+    run.size[0] = half;
+    run.size[1] = count - half;
     std::uint64_t* kt = k + capacity;
     std::uint32_t* ot = o + capacity;
-    keys[0] = k;
-    order[0] = o;
-    keys[1] = k + half;
-    order[1] = o + half;
+    run.keys[0] = k;
+    run.order[0] = o;
+    run.keys[1] = k + half;
+    run.order[1] = o + half;
     std::uint64_t* kt1 = kt + half;
     std::uint32_t* ot1 = ot + half;
-    if (size[1] == 0) {
-      radix_sort(keys[0], order[0], kt, ot, size[0]);
-      return;
+    if (run.size[1] == 0) {
+      radix_sort(run.keys[0], run.order[0], kt, ot, run.size[0]);
+      return run;
     }
-    std::thread helper([&] { radix_sort(keys[1], order[1], kt1, ot1, size[1]); });
-    radix_sort(keys[0], order[0], kt, ot, size[0]);
+    std::thread helper([&] { radix_sort(run.keys[1], run.order[1], kt1, ot1, run.size[1]); });
+    radix_sort(run.keys[0], run.order[0], kt, ot, run.size[0]);
     helper.join();
-  }
-
-  bool exhausted() const { return cursor[0] == size[0] && cursor[1] == size[1]; }
-
-  // Copies up to `max` records in sorted order to `out`; returns how many. Ties between the
-  // halves go to the first half (earlier input), which keeps the sort stable.
-  std::size_t emit(std::byte* out, std::size_t max) {
-    std::size_t n = 0;
-    const std::byte* base = records.get();
-    while (n < max) {
-      int h;
-      if (cursor[0] == size[0]) {
-        if (cursor[1] == size[1]) break;
-        h = 1;
-      } else if (cursor[1] == size[1]) {
-        h = 0;
-      } else {
-        h = keys[1][cursor[1]] < keys[0][cursor[0]] ? 1 : 0;
-      }
-      std::memcpy(out + n * record_bytes,
-                  base + std::size_t{order[h][cursor[h]]} * record_bytes, record_bytes);
-      ++cursor[h];
-      ++n;
-    }
-    return n;
+    return run;
   }
 };
 
@@ -281,6 +291,11 @@ class ExternalSorter final : public RecordSorter {
         options_(options),
         out_bytes_(out_bytes),
         run_capacity_(run_capacity) {}
+  ~ExternalSorter() override {
+    if (spiller_.joinable()) spiller_.join();
+  }
+  ExternalSorter(const ExternalSorter&) = delete;
+  ExternalSorter& operator=(const ExternalSorter&) = delete;
 
   Status push(std::span<const std::byte> records) override {
     assert(state_ == State::input && "RecordSorter::push after finish()");
@@ -289,11 +304,14 @@ class ExternalSorter final : public RecordSorter {
     std::size_t n = records.size() / record_bytes_;
     const std::byte* src = records.data();
     while (n > 0) {
-      if (!run_.records) run_.allocate(record_bytes_, run_capacity_);
-      if (run_.count == run_.capacity) OCTOLOD_RETURN_IF_ERROR(spill());
-      const std::size_t take = std::min(n, run_.capacity - run_.count);
-      std::memcpy(run_.records.get() + run_.count * record_bytes_, src, take * record_bytes_);
-      run_.count += take;
+      if (!run_.records) {
+        run_.allocate(record_bytes_, run_capacity_);
+        fill_limit_ = run_capacity_;
+      }
+      if (fill_count_ == fill_limit_) OCTOLOD_RETURN_IF_ERROR(make_room());
+      const std::size_t take = std::min(n, fill_limit_ - fill_count_);
+      std::memcpy(run_.record(fill_begin_ + fill_count_), src, take * record_bytes_);
+      fill_count_ += take;
       stats_.records += take;
       src += take * record_bytes_;
       n -= take;
@@ -304,15 +322,16 @@ class ExternalSorter final : public RecordSorter {
   Status finish() override {
     assert(state_ == State::input && "RecordSorter::finish called twice");
     Stopwatch watch(stats_.seconds);
+    OCTOLOD_RETURN_IF_ERROR(wait_for_spill());
     out_ = std::make_unique_for_overwrite<std::byte[]>(out_bytes_);
     if (runs_.empty()) {
       // In-core fast path: one in-memory sort, no temporary file.
       stats_.in_core = true;
-      run_.sort(key_, options_.threads);
+      if (run_.records) sorted_ = run_.sort(0, fill_count_, key_, options_.threads >= 2);
       state_ = State::in_core;
       return {};
     }
-    if (run_.count > 0) OCTOLOD_RETURN_IF_ERROR(spill());
+    if (fill_count_ > 0) OCTOLOD_RETURN_IF_ERROR(spill_now(fill_begin_, fill_count_));
     run_.release();
     OCTOLOD_RETURN_IF_ERROR(merge_down());
     stats_.fan_in = std::max(stats_.fan_in, static_cast<std::uint32_t>(runs_.size()));
@@ -330,8 +349,8 @@ class ExternalSorter final : public RecordSorter {
     const std::size_t max = out_bytes_ / record_bytes_;
     std::size_t n = 0;
     if (state_ == State::in_core) {
-      n = run_.emit(out_.get(), max);
-      if (run_.exhausted()) run_.release();
+      n = sorted_.emit(out_.get(), max);
+      if (sorted_.exhausted()) run_.release();
     } else {
       auto emitted = final_.emit(out_.get(), max);
       if (!emitted.ok()) return emitted.status();
@@ -346,23 +365,68 @@ class ExternalSorter final : public RecordSorter {
  private:
   enum class State { input, in_core, merging };
 
-  // Sorts the run buffer and writes it to a new run file.
-  Status spill() {
-    run_.sort(key_, options_.threads);
-    TempFile file = make_temp_file(options_.work_dir, "run");
-    auto writer = RecordWriter::create(file.path(), record_bytes_, out_bytes_);
-    if (!writer.ok()) return writer.status();
-    while (!run_.exhausted()) {
-      auto space = writer->reserve(SIZE_MAX);
-      if (!space.ok()) return space.status();
-      writer->commit(run_.emit(space->data(), space->size() / record_bytes_));
+  // The filled part of the run buffer must go to disk before more records fit. With one thread,
+  // or for the first run (so that everything up to the full buffer stays in core), the whole
+  // buffer is sorted and written now. After that, with two threads, the buffer is used as two
+  // halves: one is sorted and written by a helper thread while the caller fills the other.
+  Status make_room() {
+    if (options_.threads < 2 || runs_.empty()) {
+      OCTOLOD_RETURN_IF_ERROR(wait_for_spill());
+      OCTOLOD_RETURN_IF_ERROR(spill_now(fill_begin_, fill_count_));
+      if (options_.threads >= 2) fill_limit_ = run_capacity_ / 2;
+      fill_begin_ = 0;
+      fill_count_ = 0;
+      return {};
     }
-    OCTOLOD_RETURN_IF_ERROR(writer->finish());
-    stats_.bytes_written += run_.count * record_bytes_;
+    OCTOLOD_RETURN_IF_ERROR(wait_for_spill());
+    const std::size_t begin = fill_begin_;
+    const std::size_t count = fill_count_;
+    spill_file_ = make_temp_file(options_.work_dir, "run");
+    spiller_ = std::thread([this, begin, count] {
+      spill_status_ = write_run(run_.sort(begin, count, key_, false), spill_file_.path());
+    });
+    spill_records_ = count;
+    fill_begin_ = begin == 0 ? fill_limit_ : 0;
+    fill_count_ = 0;
+    return {};
+  }
+
+  // Waits for the helper thread's run, if any, and adopts it.
+  Status wait_for_spill() {
+    if (!spiller_.joinable()) return {};
+    spiller_.join();
+    if (!spill_status_.ok()) {
+      spill_file_.remove();
+      return spill_status_;
+    }
+    adopt_run(std::move(spill_file_), spill_records_);
+    return {};
+  }
+
+  // Sorts records [begin, begin + count) of the run buffer and writes them as a run, now.
+  Status spill_now(std::size_t begin, std::size_t count) {
+    TempFile file = make_temp_file(options_.work_dir, "run");
+    OCTOLOD_RETURN_IF_ERROR(
+        write_run(run_.sort(begin, count, key_, options_.threads >= 2), file.path()));
+    adopt_run(std::move(file), count);
+    return {};
+  }
+
+  void adopt_run(TempFile file, std::size_t records) {
+    stats_.bytes_written += records * record_bytes_;
     ++stats_.runs;
     runs_.push_back(std::move(file));
-    run_.count = 0;
-    return {};
+  }
+
+  Status write_run(SortedRun run, const std::filesystem::path& path) const {
+    auto writer = RecordWriter::create(path, record_bytes_, out_bytes_);
+    if (!writer.ok()) return writer.status();
+    while (!run.exhausted()) {
+      auto space = writer->reserve(SIZE_MAX);
+      if (!space.ok()) return space.status();
+      writer->commit(run.emit(space->data(), space->size() / record_bytes_));
+    }
+    return writer->finish();
   }
 
   // Memory left for merge inputs once the output buffer is taken.
@@ -434,9 +498,19 @@ class ExternalSorter final : public RecordSorter {
   SortKeyFn key_;
   SortOptions options_;
   std::size_t out_bytes_;     // output / run writer buffer
-  std::size_t run_capacity_;  // records per run
+  std::size_t run_capacity_;  // records in the run buffer
   State state_ = State::input;
   RunBuffer run_;
+  // The part of the run buffer being filled: records [fill_begin_, fill_begin_ + fill_limit_).
+  std::size_t fill_begin_ = 0;
+  std::size_t fill_limit_ = 0;
+  std::size_t fill_count_ = 0;
+  // The run the helper thread is sorting and writing (threads >= 2).
+  std::thread spiller_;
+  TempFile spill_file_;
+  std::size_t spill_records_ = 0;
+  Status spill_status_;
+  SortedRun sorted_;  // the in-core fast path's output
   std::vector<TempFile> runs_;
   KWayMerge final_;
   std::unique_ptr<std::byte[]> out_;

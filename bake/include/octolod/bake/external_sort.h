@@ -4,7 +4,8 @@
 //
 //   1. Run formation: records are gathered into a run buffer sized by the budget; a full buffer
 //      is sorted (LSD radix sort on the 64-bit key, two halves on two threads when allowed) and
-//      written to a temporary run file.
+//      written to a temporary run file. With two threads, after the first run the buffer works
+//      as two halves: a helper thread sorts and writes one while the caller fills the other.
 //   2. Merge: the runs are merged with the largest fan-in the budget allows (loser tree); only
 //      when there are more runs than that are intermediate merge passes made, each merging
 //      consecutive runs so the sort stays stable. The final pass is streamed to the caller.
@@ -29,7 +30,8 @@ namespace octolod::bake {
 
 // Computes the sort keys of `keys.size()` consecutive records starting at `records`
 // (records.size() == keys.size() * record_bytes). Called once per batch of records, never per
-// record, so an indirect call costs nothing. Must be a pure function of the record bytes.
+// record, so an indirect call costs nothing. Must be a pure function of the record bytes; it may
+// run on the sorter's helper thread while the caller's thread does other work.
 using SortKeyFn = std::function<void(std::span<const std::byte> records,
                                      std::span<std::uint64_t> keys)>;
 
@@ -44,8 +46,9 @@ struct SortOptions {
   std::uint64_t memory_budget_bytes = std::uint64_t{64} << 20;
   // Where run files go; the system temporary directory when empty.
   std::filesystem::path work_dir;
-  // 1: sort runs on the calling thread; 2 or more: sort the two halves of a large run on two
-  // threads. The output is identical for any value.
+  // 1: sort and write runs on the calling thread; 2 or more: also use one helper thread (run
+  // halves sorted in parallel, runs written while the caller pushes more). The output is
+  // identical for any value.
   unsigned threads = 2;
   // Largest buffer per file (bigger blocks stop paying off); smaller when the budget demands.
   std::size_t max_io_buffer_bytes = std::size_t{1} << 20;
