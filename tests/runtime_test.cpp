@@ -7,9 +7,16 @@
 //   leaves   lods (0,    0.64): coarse from 277,    fine always
 #include <gtest/gtest.h>
 
+#include <unistd.h>
+
 #include <algorithm>
 #include <chrono>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
 #include <thread>
+
+#include <nlohmann/json.hpp>
 
 #include "runtime_test_helpers.h"
 
@@ -203,6 +210,7 @@ TEST(Paging, RootCoarsestLodIsRequestedFirstAndPinned) {
 TEST(Paging, ResidentBytesNeverExceedABudgetSmallerThanTheCut) {
   StreamingOptions options;
   options.max_resident_bytes = 30000;  // the 64-leaf cut needs 64 · 1560 = 99840
+  options.max_loads_in_flight = 4;
   Fixture fx(3, options);
   const Camera camera = front(100.0f);
   std::uint32_t fallbacks = 0;
@@ -464,6 +472,67 @@ TEST(Paging, TreeCanBeDestroyedWithLoadsStillPosted) {
   EXPECT_GT(executor->pending(), 0u);
   executor->run_pending();  // the tasks own their queue; nothing is loaded after shutdown
   EXPECT_EQ(tree.source->total_reads(), 0u);
+}
+
+// --- on disk ----------------------------------------------------------------------------------
+
+std::filesystem::path scratch_dir(const std::string& name) {
+  const auto dir = std::filesystem::temp_directory_path() /
+                   ("octolod_runtime_test_" + name + "_" + std::to_string(::getpid()));
+  std::filesystem::remove_all(dir);
+  return dir;
+}
+
+TEST(Disk, OpenDirectoryStreamsNodeFilesFromDisk) {
+  const SyntheticTree tree = make_full_octree(3);
+  const auto dir = scratch_dir("open");
+  testing::write_tree(tree, dir);
+  auto executor = std::make_shared<SynchronousExecutor>();
+  auto opened = StreamingTree::open_directory(dir, executor, StreamingOptions{});
+  ASSERT_TRUE(opened.ok()) << opened.status().message();
+  const FrameResult& frame = settle(*opened.value(), *executor, front(200.0f));
+  EXPECT_EQ(frame.stats.drawn_nodes, 8u);
+  EXPECT_EQ(frame.stats.fallbacks, 0u);
+  EXPECT_EQ(frame.stats.loads_failed, 0u);
+  std::filesystem::remove_all(dir);
+}
+
+TEST(Disk, FileSourceReportsAMissingFileAsAnIoError) {
+  const FileSource source(std::filesystem::temp_directory_path());
+  Result<std::vector<std::byte>> read = source.read("octolod_no_such_dir/lod0.bin");
+  ASSERT_FALSE(read.ok());
+  EXPECT_EQ(read.status().code(), ErrorCode::io);
+  EXPECT_NE(read.status().message().find("lod0.bin"), std::string::npos);
+}
+
+TEST(Disk, WalkCommandReplaysAPathAndReportsJson) {
+  const char* cli = std::getenv("OCTOLOD_CLI");
+  if (cli == nullptr || !std::filesystem::exists(cli)) GTEST_SKIP() << "OCTOLOD_CLI not built";
+  const SyntheticTree tree = make_full_octree(4);
+  const auto dir = scratch_dir("walk");
+  testing::write_tree(tree, dir);
+  const auto out = dir / "walk.json";
+  const auto csv = dir / "walk.csv";
+  const std::string command = std::string(cli) + " walk " + dir.string() +
+                              " --path far-to-near --frames 120 --fps 0 --budget 200K --json --csv " +
+                              csv.string() + " > " + out.string();
+  ASSERT_EQ(std::system(command.c_str()), 0) << command;
+  std::ifstream in(out);
+  const nlohmann::json doc = nlohmann::json::parse(in);
+  EXPECT_EQ(doc.at("frames"), 120);
+  EXPECT_EQ(doc.at("frames_waiting_on_io"), 0);
+  EXPECT_LE(doc.at("max_resident_bytes").get<std::uint64_t>(), 200u * 1024u);
+  EXPECT_GT(doc.at("loads").get<std::uint64_t>(), 0u);
+  EXPECT_GT(doc.at("mean_drawn_triangles").get<double>(), 0.0);
+  for (const char* key : {"mean_resident_bytes", "fallback_frames", "hits", "misses", "hit_rate",
+                          "selection_ms_p50", "selection_ms_p99", "selection_ms_max"})
+    EXPECT_TRUE(doc.contains(key)) << key;
+  std::ifstream rows(csv);
+  std::string line;
+  int lines = 0;
+  while (std::getline(rows, line)) ++lines;
+  EXPECT_EQ(lines, 121);  // header + one row per frame
+  std::filesystem::remove_all(dir);
 }
 
 // --- open -------------------------------------------------------------------------------------

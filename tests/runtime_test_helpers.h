@@ -6,6 +6,8 @@
 
 #include <cmath>
 #include <cstdint>
+#include <filesystem>
+#include <fstream>
 #include <map>
 #include <memory>
 #include <set>
@@ -121,6 +123,23 @@ inline SyntheticTree make_full_octree(std::uint32_t levels, float size = 64.0f) 
     n.source_triangles = SyntheticTree::kFineTriangles;
   }
   return t;
+}
+
+// Writes the tree as a baker would: `dir`/manifest.json and every node file below `dir`.
+inline void write_tree(const SyntheticTree& t, const std::filesystem::path& dir) {
+  std::filesystem::create_directories(dir);
+  ASSERT_TRUE(write_manifest(dir / std::string(kManifestFileName), t.manifest).ok());
+  for (const NodeInfo& n : t.manifest.nodes) {
+    for (const LodInfo& lod : n.lods) {
+      Result<std::vector<std::byte>> bytes = t.source->read(lod.file);
+      ASSERT_TRUE(bytes.ok());
+      const std::filesystem::path file = dir / lod.file;
+      std::filesystem::create_directories(file.parent_path());
+      std::ofstream out(file, std::ios::binary);
+      out.write(reinterpret_cast<const char*>(bytes->data()), static_cast<std::streamsize>(bytes->size()));
+      ASSERT_TRUE(out.good()) << file;
+    }
+  }
 }
 
 constexpr float kFovy = 1.0471976f;  // 60 degrees

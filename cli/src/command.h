@@ -26,6 +26,7 @@ void print_json(const nlohmann::json& document);
 Result<std::uint64_t> parse_byte_size(const std::string& text);
 
 void add_sample_command(CLI::App& app, CommandContext& context);
+void add_walk_command(CLI::App& app, CommandContext& context);
 
 
 

@@ -49,6 +49,7 @@ int main(int argc, char** argv) {
   app.add_flag("--progress", context.progress,
                "Human progress on stderr (default: only when stderr is a terminal)");
   add_sample_command(app, context);
+  add_walk_command(app, context);
 
 
 

@@ -92,6 +92,9 @@ class NodeCache {
   std::vector<Slot> slots_;
   std::vector<std::uint32_t> subtree_resident_;
   std::uint32_t head_ = kNoSlot, tail_ = kNoSlot;
+  // When not kNoSlot: every free entry was used at or after this frame (a make_room walk found
+  // nothing to reclaim below it). Cleared when an entry joins the free list.
+  std::uint32_t all_protected_from_ = kNoSlot;
   std::uint64_t in_use_bytes_ = 0, free_bytes_ = 0, reserved_bytes_ = 0;
 };
 

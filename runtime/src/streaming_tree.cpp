@@ -423,13 +423,14 @@ void StreamingTree::Impl::issue_loads(const SelectionView& view, const Camera& c
   if (options.prefetch && requested < options.max_loads_in_flight) {
     // Collected after the needed loads took their room: prefetch touches protect entries.
     collect_prefetch(view, camera);
-    std::sort(prefetch.begin(), prefetch.end(), by_priority);
+    // Only the best few can be queued: order just those.
+    const std::size_t best = std::min<std::size_t>(prefetch.size(), 2u * options.max_loads_in_flight);
+    std::partial_sort(prefetch.begin(), prefetch.begin() + static_cast<std::ptrdiff_t>(best),
+                      prefetch.end(), by_priority);
     const std::uint32_t protect =
         frame > options.prefetch_protect_frames ? frame - options.prefetch_protect_frames : 0;
-    for (const Candidate& c : prefetch) {
-      if (requested >= options.max_loads_in_flight) break;
-      issue(c.slot, protect, stats);
-    }
+    for (std::size_t i = 0; i < best && requested < options.max_loads_in_flight; ++i)
+      issue(prefetch[i].slot, protect, stats);
   }
 
   for (std::uint32_t s : old_pending)

@@ -66,8 +66,10 @@ struct StreamingOptions {
   // entries and prefetches. 1 lets the cut take everything (then a cut change may stall on
   // fallbacks until the old cut is no longer drawn).
   double max_cut_fraction = 0.5;
-  // Loads queued or running at once. More hides latency; fewer keeps priorities fresh.
-  std::uint32_t max_loads_in_flight = 8;
+  // Loads queued or running at once; every update() re-plans the queue and refills it, so this
+  // also caps the loads started per frame. More hides latency and raises throughput; fewer keeps
+  // the queue closer to the current view (more of it can be cancelled).
+  std::uint32_t max_loads_in_flight = 32;
   // Called once per node LOD that failed to load (missing file, checksum failure, wrong layout),
   // from the thread that calls update(). Null: silent.
   std::function<void(std::string_view message)> log;

@@ -1,0 +1,301 @@
+// octolod walk: replays a camera path against a baked tree at a fixed frame rate, streaming the
+// real node files through loader threads (octolod::runtime), and reports per-frame and summary
+// paging statistics — the camera-path measurements of seeds 000 and 003 and Holst & Schumann.
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <memory>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "command.h"
+#include "image.h"
+#include "line_chart.h"
+#include "octolod/formats/manifest.h"
+#include "octolod/runtime/streaming_tree.h"
+
+namespace octolod::cli {
+namespace {
+
+struct WalkArgs {
+  std::string tree;
+  std::string path = "orbit";
+  std::uint32_t frames = 600;
+  std::string budget = "64M";
+  double sse = 2.0;
+  double fps = 60.0;
+  unsigned threads = 2;
+  std::uint32_t loads_in_flight = runtime::StreamingOptions{}.max_loads_in_flight;
+  bool no_prefetch = false;
+  std::string csv;
+  std::string plot;
+};
+
+constexpr float kFovyRadians = 1.0471976f;  // 60 degrees
+constexpr float kAspect = 16.0f / 9.0f;
+constexpr float kViewportHeight = 1080.0f;
+
+struct Key {
+  glm::vec3 eye;
+  glm::vec3 target;
+};
+
+glm::vec3 vec(const nlohmann::json& j) {
+  return glm::vec3(j.at(0).get<float>(), j.at(1).get<float>(), j.at(2).get<float>());
+}
+
+// {"keyframes": [{"eye": [x,y,z], "target": [x,y,z]}, ...]} in model units, at least two.
+Result<std::vector<Key>> read_keyframes(const std::string& file) {
+  std::ifstream in(file);
+  if (!in) return io_error(file + ": cannot open camera path");
+  const nlohmann::json doc = nlohmann::json::parse(in, nullptr, false);
+  if (doc.is_discarded()) return bad_input_error(file + ": not valid JSON");
+  std::vector<Key> keys;
+  try {
+    for (const auto& k : doc.at("keyframes")) keys.push_back({vec(k.at("eye")), vec(k.at("target"))});
+  } catch (const nlohmann::json::exception& e) {
+    return bad_input_error(file + ": expected {\"keyframes\": [{\"eye\": [x,y,z], \"target\": [x,y,z]}, ...]}: " +
+                           e.what());
+  }
+  if (keys.size() < 2) return bad_input_error(file + ": a camera path needs at least two keyframes");
+  return keys;
+}
+
+// One camera per frame. Built-in paths are sized from the model's bounds: centre c, radius r
+// (half the diagonal).
+Result<std::vector<runtime::Camera>> camera_path(const std::string& kind, const Bounds& bounds,
+                                                 std::uint32_t frames) {
+  const glm::vec3 lo(bounds.min[0], bounds.min[1], bounds.min[2]);
+  const glm::vec3 hi(bounds.max[0], bounds.max[1], bounds.max[2]);
+  const glm::vec3 c = 0.5f * (lo + hi);
+  const float r = std::max(0.5f * glm::length(hi - lo), 1e-6f);
+  std::vector<Key> keys;
+  std::vector<Key> per_frame;
+  auto t_of = [&](std::uint32_t i) {
+    return frames > 1 ? static_cast<float>(i) / static_cast<float>(frames - 1) : 0.0f;
+  };
+  if (kind == "orbit") {  // one turn at 2.2 r, slightly above
+    for (std::uint32_t i = 0; i < frames; ++i) {
+      const float a = 6.2831853f * static_cast<float>(i) / static_cast<float>(frames);
+      per_frame.push_back({c + 2.2f * r * glm::vec3(std::cos(a), 0.35f, std::sin(a)), c});
+    }
+  } else if (kind == "far-to-near") {  // from 12 r to 0.6 r, geometric, looking at the centre
+    const glm::vec3 dir = glm::normalize(glm::vec3(0.6f, 0.35f, 1.0f));
+    for (std::uint32_t i = 0; i < frames; ++i)
+      per_frame.push_back({c + dir * (12.0f * r * std::pow(0.05f, t_of(i))), c});
+  } else if (kind == "flythrough") {  // a straight pass through the model, looking ahead
+    const glm::vec3 from = c + r * glm::vec3(-1.6f, 0.15f, -1.2f);
+    const glm::vec3 to = c + r * glm::vec3(1.6f, 0.05f, 1.2f);
+    for (std::uint32_t i = 0; i < frames; ++i) {
+      const glm::vec3 eye = from + (to - from) * t_of(i);
+      per_frame.push_back({eye, eye + (to - from)});
+    }
+  } else {
+    Result<std::vector<Key>> read = read_keyframes(kind);
+    if (!read.ok()) return read.status();
+    keys = std::move(read).value();
+    for (std::uint32_t i = 0; i < frames; ++i) {  // linear between keyframes, evenly spread
+      const float s = t_of(i) * static_cast<float>(keys.size() - 1);
+      const auto k = std::min(static_cast<std::size_t>(s), keys.size() - 2);
+      const float f = s - static_cast<float>(k);
+      per_frame.push_back({keys[k].eye + (keys[k + 1].eye - keys[k].eye) * f,
+                           keys[k].target + (keys[k + 1].target - keys[k].target) * f});
+    }
+  }
+  std::vector<runtime::Camera> cameras;
+  for (const Key& k : per_frame) {
+    const glm::vec3 forward = k.target - k.eye;
+    const glm::vec3 up = std::abs(glm::normalize(forward).y) > 0.99f ? glm::vec3(0, 0, 1) : glm::vec3(0, 1, 0);
+    cameras.push_back(runtime::make_perspective_camera(k.eye, k.target, up, kFovyRadians, kAspect,
+                                                       1e-3f * r, 100.0f * r, kViewportHeight));
+  }
+  return cameras;
+}
+
+double percentile(std::vector<double> v, double p) {
+  if (v.empty()) return 0;
+  std::sort(v.begin(), v.end());
+  return v[std::min(v.size() - 1, static_cast<std::size_t>(p * static_cast<double>(v.size() - 1) + 0.5))];
+}
+
+void write_csv_row(std::ofstream& csv, std::uint32_t frame, const runtime::FrameStats& s) {
+  csv << frame << ',' << s.visited << ',' << s.culled << ',' << s.wanted << ',' << s.drawn_nodes << ','
+      << s.drawn_triangles << ',' << s.resident_bytes << ',' << s.reserved_bytes << ','
+      << s.loads_issued << ',' << s.loads_completed << ',' << s.loads_cancelled << ',' << s.loads_failed
+      << ',' << s.cache_hits << ',' << s.cache_misses << ',' << s.second_chance_hits << ','
+      << s.fallbacks << ',' << s.holes << ',' << s.coarsening << ',' << s.selection_ms << '\n';
+}
+
+int run_walk(const WalkArgs& args, const CommandContext& context) {
+  Result<std::uint64_t> budget = parse_byte_size(args.budget);
+  if (!budget.ok()) return report(budget.status());
+  if (args.frames == 0) return report(usage_error("--frames must be at least 1"));
+  if (!(args.fps >= 0.0)) return report(usage_error("--fps must be >= 0 (0: as fast as possible)"));
+  if (args.threads == 0) return report(usage_error("--threads must be at least 1"));
+
+  runtime::StreamingOptions options;
+  options.max_resident_bytes = budget.value();
+  options.target_sse_pixels = args.sse;
+  options.prefetch = !args.no_prefetch;
+  options.max_loads_in_flight = args.loads_in_flight;
+  options.log = [](std::string_view message) {
+    std::fprintf(stderr, "warning: %.*s\n", static_cast<int>(message.size()), message.data());
+  };
+  auto executor = std::make_shared<runtime::ThreadPoolExecutor>(args.threads);
+  Result<std::unique_ptr<runtime::StreamingTree>> opened =
+      runtime::StreamingTree::open_directory(args.tree, executor, options);
+  if (!opened.ok()) return report(opened.status());
+  runtime::StreamingTree& tree = *opened.value();
+  Result<std::vector<runtime::Camera>> cameras = camera_path(args.path, tree.manifest().bounds, args.frames);
+  if (!cameras.ok()) return report(cameras.status());
+
+  std::ofstream csv;
+  if (!args.csv.empty()) {
+    csv.open(args.csv);
+    if (!csv) return report(io_error(args.csv + ": cannot create"));
+    csv << "frame,visited,culled,wanted,drawn_nodes,drawn_triangles,resident_bytes,reserved_bytes,"
+           "loads_issued,loads_completed,loads_cancelled,loads_failed,cache_hits,cache_misses,"
+           "second_chance_hits,fallbacks,holes,coarsening,selection_ms\n";
+  }
+
+  // replay at a fixed frame rate: loads progress on the loader threads between frames
+  std::vector<runtime::FrameStats> stats;
+  stats.reserve(args.frames);
+  const auto start = std::chrono::steady_clock::now();
+  for (std::uint32_t i = 0; i < args.frames; ++i) {
+    if (args.fps > 0) {
+      std::this_thread::sleep_until(start + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                                                std::chrono::duration<double>(i / args.fps)));
+    }
+    stats.push_back(tree.update(cameras.value()[i]).stats);
+    if (csv.is_open()) write_csv_row(csv, i, stats.back());
+  }
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  if (csv.is_open() && !csv.flush()) return report(io_error(args.csv + ": write failed"));
+
+  // summary
+  std::uint64_t max_resident = 0, hits = 0, misses = 0, second_chance = 0, issued = 0, loads = 0,
+                cancelled = 0, failed = 0;
+  double resident_sum = 0, triangles_sum = 0, max_coarsening = 1;
+  std::uint32_t waiting_frames = 0, fallback_frames = 0, hole_frames = 0;
+  std::vector<double> ms;
+  for (const runtime::FrameStats& s : stats) {
+    max_resident = std::max(max_resident, s.resident_bytes);
+    resident_sum += static_cast<double>(s.resident_bytes);
+    triangles_sum += static_cast<double>(s.drawn_triangles);
+    hits += s.cache_hits;
+    misses += s.cache_misses;
+    second_chance += s.second_chance_hits;
+    issued += s.loads_issued;
+    loads += s.loads_completed;
+    cancelled += s.loads_cancelled;
+    failed += s.loads_failed;
+    waiting_frames += s.waiting_on_io > 0 ? 1u : 0u;
+    fallback_frames += (s.fallbacks > 0 || s.holes > 0) ? 1u : 0u;
+    hole_frames += s.holes > 0 ? 1u : 0u;
+    max_coarsening = std::max(max_coarsening, static_cast<double>(s.coarsening));
+    ms.push_back(s.selection_ms);
+  }
+  const double n = static_cast<double>(stats.size());
+  const double hit_rate = hits + misses > 0 ? static_cast<double>(hits) / static_cast<double>(hits + misses) : 1.0;
+  nlohmann::json doc{{"tree", args.tree},
+                     {"path", args.path},
+                     {"frames", stats.size()},
+                     {"fps", args.fps},
+                     {"seconds", seconds},
+                     {"threads", args.threads},
+                     {"budget_bytes", budget.value()},
+                     {"target_sse_pixels", args.sse},
+                     {"prefetch", !args.no_prefetch},
+                     {"loads_in_flight", args.loads_in_flight},
+                     {"max_resident_bytes", max_resident},
+                     {"mean_resident_bytes", resident_sum / n},
+                     {"frames_waiting_on_io", waiting_frames},
+                     {"fallback_frames", fallback_frames},
+                     {"hole_frames", hole_frames},
+                     {"loads", loads},
+                     {"loads_issued", issued},
+                     {"loads_cancelled", cancelled},
+                     {"loads_failed", failed},
+                     {"hits", hits},
+                     {"misses", misses},
+                     {"second_chance_hits", second_chance},
+                     {"hit_rate", hit_rate},
+                     {"max_coarsening", max_coarsening},
+                     {"selection_ms_p50", percentile(ms, 0.5)},
+                     {"selection_ms_p99", percentile(ms, 0.99)},
+                     {"selection_ms_max", ms.empty() ? 0.0 : *std::max_element(ms.begin(), ms.end())},
+                     {"mean_drawn_triangles", triangles_sum / n}};
+
+  if (!args.plot.empty()) {
+    std::vector<ChartSeries> series(5);
+    series[0] = {"DRAWN TRIANGLES", {}, 0x3070e0, -1};
+    series[1] = {"RESIDENT MB", {}, 0x20a050, static_cast<double>(budget.value()) / 1048576.0};
+    series[2] = {"FALLBACK DRAWS", {}, 0xe07020, -1};
+    series[3] = {"LOADS COMPLETED", {}, 0x8040c0, -1};
+    series[4] = {"SELECTION MS", {}, 0xc03040, -1};
+    for (const runtime::FrameStats& s : stats) {
+      series[0].values.push_back(static_cast<double>(s.drawn_triangles));
+      series[1].values.push_back(static_cast<double>(s.resident_bytes) / 1048576.0);
+      series[2].values.push_back(s.fallbacks);
+      series[3].values.push_back(s.loads_completed);
+      series[4].values.push_back(s.selection_ms);
+    }
+    const Status written = write_png(args.plot, draw_line_charts(series, 960, 110));
+    if (!written.ok()) return report(written);
+  }
+
+  if (context.json) {
+    print_json(doc);
+  } else {
+    std::printf("%s: %s, %zu frames in %.1f s, budget %.1f MB, target %.2f px\n", args.tree.c_str(),
+                args.path.c_str(), stats.size(), seconds, static_cast<double>(budget.value()) / 1048576.0,
+                args.sse);
+    std::printf("  resident: max %.1f MB, mean %.1f MB; mean drawn triangles %.0f\n",
+                static_cast<double>(max_resident) / 1048576.0, resident_sum / n / 1048576.0, triangles_sum / n);
+    std::printf("  loads %llu (cancelled %llu, failed %llu); hits %llu, misses %llu, hit rate %.3f, "
+                "second chance %llu\n",
+                static_cast<unsigned long long>(loads), static_cast<unsigned long long>(cancelled),
+                static_cast<unsigned long long>(failed), static_cast<unsigned long long>(hits),
+                static_cast<unsigned long long>(misses), hit_rate, static_cast<unsigned long long>(second_chance));
+    std::printf("  frames waiting on I/O %u, frames with fallbacks %u (with holes %u)\n", waiting_frames,
+                fallback_frames, hole_frames);
+    std::printf("  selection ms: p50 %.4f, p99 %.4f, max %.4f\n", percentile(ms, 0.5), percentile(ms, 0.99),
+                ms.empty() ? 0.0 : *std::max_element(ms.begin(), ms.end()));
+  }
+  return 0;
+}
+
+}  // namespace
+
+void add_walk_command(CLI::App& app, CommandContext& context) {
+  auto args = std::make_shared<WalkArgs>();
+  CLI::App* command = app.add_subcommand(
+      "walk", "Replay a camera path against a baked tree with the streaming runtime; paging statistics");
+  command->add_option("tree", args->tree, "Baked tree directory (holds manifest.json)")->required();
+  command
+      ->add_option("--path", args->path,
+                   "orbit | far-to-near | flythrough | FILE.json ({\"keyframes\": [{\"eye\": [x,y,z], "
+                   "\"target\": [x,y,z]}, ...]}, model units)")
+      ->capture_default_str();
+  command->add_option("--frames", args->frames, "Frames to replay")->capture_default_str();
+  command->add_option("--budget", args->budget, "Cache budget: 8M, 512K, 1G")->capture_default_str();
+  command->add_option("--sse", args->sse, "Screen-space error target in pixels (1080 px viewport)")
+      ->capture_default_str();
+  command->add_option("--fps", args->fps, "Frame rate of the replay; 0 = as fast as possible")
+      ->capture_default_str();
+  command->add_option("--threads", args->threads, "Loader threads")->capture_default_str();
+  command->add_option("--loads-in-flight", args->loads_in_flight, "Loads queued or running at once")
+      ->capture_default_str();
+  command->add_flag("--no-prefetch", args->no_prefetch, "Load only what frames want");
+  command->add_option("--csv", args->csv, "Write per-frame statistics to this CSV file");
+  command->add_option("--plot", args->plot, "Write per-frame charts to this PNG file");
+  command->callback([args, &context] { context.exit_code = run_walk(*args, context); });
+}
+
+}  // namespace octolod::cli
