@@ -289,6 +289,22 @@ TEST(Soup, FacesBeforeVerticesGiveTheSameSoup) {
   }
 }
 
+TEST(Soup, EmptyMeshGivesAnEmptySoup) {
+  WorkDir dir;
+  PlyWriteOptions write_options;
+  ASSERT_TRUE(write_ply(dir.file("empty.ply"), write_options, {}, {}).ok());
+  for (const bool force : {false, true}) {
+    SoupOptions options = options_in(dir, 1u << 20);
+    options.force_out_of_core = force;
+    auto r = build_soup(dir.file("empty.ply"), options);
+    ASSERT_TRUE(r.ok()) << r.status().message();
+    EXPECT_EQ(r->triangle_count, 0u);
+    EXPECT_EQ(r->vertex_count, 0u);
+    EXPECT_TRUE(r->bounds.empty());
+    EXPECT_EQ(std::filesystem::file_size(r->soup.path()), 0u);
+  }
+}
+
 TEST(Soup, ProgressReportsEveryStage) {
   WorkDir dir;
   const GridMesh mesh = make_grid(30, 30);

@@ -33,65 +33,60 @@ SortKeyFn last_corner_key(VertexLayout layout, int filled) {
 }
 
 Status dereference_pass(int corner, VertexLayout layout, RecordSorter& sorted,
-                        RecordReader& vertices, std::span<std::byte> scratch,
-                        const RecordSink& sink) {
+                        RecordReader& vertices, RecordOutput& out) {
   const std::size_t in_bytes = working_record_bytes(layout, corner);
   const std::size_t out_bytes = working_record_bytes(layout, corner + 1);
   const std::size_t vertex_bytes = layout.bytes();
   const std::size_t prefix = working_vertex_id_offset(layout, corner);  // filled corners
   const std::size_t suffix = in_bytes - prefix - 4;                     // ids after, triangle id
-  const std::size_t batch = scratch.size() / out_bytes;
-  assert(batch >= 1 && "dereference_pass: scratch must hold an output record");
   assert(sorted.record_bytes() == in_bytes && "dereference_pass: sorter of the wrong records");
 
   // The block of the vertex file in memory: vertices [block_first, block_end).
   std::uint64_t block_first = 0;
   std::uint64_t block_end = 0;
   const std::byte* block = nullptr;
-  std::size_t filled = 0;
   for (;;) {
     auto in = sorted.next();
     if (!in.ok()) return in.status();
     if (in->empty()) break;
     const std::byte* rec = in->data();
-    const std::size_t count = in->size() / in_bytes;
-    for (std::size_t i = 0; i < count; ++i, rec += in_bytes) {
-      const std::uint32_t id = load_u32(rec + prefix);
-      assert(id >= block_first && "dereference_pass: input not sorted by this corner's id");
-      while (id >= block_end) {
-        auto next = vertices.read();
-        if (!next.ok()) return next.status();
-        if (next->empty()) {
-          return io_error("vertex file '" + vertices.path().string() + "' has " +
-                          std::to_string(vertices.record_count()) + " vertices, vertex " +
-                          std::to_string(id) + " is missing");
+    std::size_t left = in->size() / in_bytes;
+    while (left > 0) {
+      auto space = out.reserve(left);
+      if (!space.ok()) return space.status();
+      const std::size_t n = space->size() / out_bytes;
+      std::byte* dst = space->data();
+      for (std::size_t i = 0; i < n; ++i, rec += in_bytes, dst += out_bytes) {
+        const std::uint32_t id = load_u32(rec + prefix);
+        assert(id >= block_first && "dereference_pass: input not sorted by this corner's id");
+        while (id >= block_end) {
+          auto next = vertices.read();
+          if (!next.ok()) return next.status();
+          if (next->empty()) {
+            return io_error("vertex file '" + vertices.path().string() + "' has " +
+                            std::to_string(vertices.record_count()) + " vertices, vertex " +
+                            std::to_string(id) + " is missing");
+          }
+          block = next->data();
+          block_first = block_end;
+          block_end += next->size() / vertex_bytes;
         }
-        block = next->data();
-        block_first = block_end;
-        block_end += next->size() / vertex_bytes;
+        std::memcpy(dst, rec, prefix);
+        std::memcpy(dst + prefix, block + (id - block_first) * vertex_bytes, vertex_bytes);
+        std::memcpy(dst + prefix + vertex_bytes, rec + prefix + 4, suffix);
       }
-      std::byte* out = scratch.data() + filled * out_bytes;
-      std::memcpy(out, rec, prefix);
-      std::memcpy(out + prefix, block + (id - block_first) * vertex_bytes, vertex_bytes);
-      std::memcpy(out + prefix + vertex_bytes, rec + prefix + 4, suffix);
-      if (++filled == batch) {
-        OCTOLOD_RETURN_IF_ERROR(sink(scratch.first(filled * out_bytes)));
-        filled = 0;
-      }
+      OCTOLOD_RETURN_IF_ERROR(out.commit(n));
+      left -= n;
     }
   }
-  if (filled > 0) OCTOLOD_RETURN_IF_ERROR(sink(scratch.first(filled * out_bytes)));
   return {};
 }
 
 Status dereference_in_core(VertexLayout layout, std::span<const float> vertices,
-                           RecordSorter& sorted, std::span<std::byte> scratch,
-                           const RecordSink& sink) {
+                           RecordSorter& sorted, RecordOutput& out) {
   const std::size_t floats = layout.floats();
   const std::size_t vertex_bytes = layout.bytes();
   const std::size_t out_bytes = soup_record_bytes(layout);
-  const std::size_t batch = scratch.size() / out_bytes;
-  assert(batch >= 1 && "dereference_in_core: scratch must hold a soup record");
   assert(sorted.record_bytes() == sizeof(TriangleRecord));
   for (;;) {
     auto in = sorted.next();
@@ -100,16 +95,18 @@ Status dereference_in_core(VertexLayout layout, std::span<const float> vertices,
     const std::byte* rec = in->data();
     std::size_t left = in->size() / sizeof(TriangleRecord);
     while (left > 0) {
-      const std::size_t n = std::min(left, batch);
-      std::byte* out = scratch.data();
-      for (std::size_t i = 0; i < n; ++i, rec += sizeof(TriangleRecord), out += out_bytes) {
+      auto space = out.reserve(left);
+      if (!space.ok()) return space.status();
+      const std::size_t n = space->size() / out_bytes;
+      std::byte* dst = space->data();
+      for (std::size_t i = 0; i < n; ++i, rec += sizeof(TriangleRecord), dst += out_bytes) {
         for (std::size_t c = 0; c < 3; ++c) {
           const std::size_t id = load_u32(rec + 4 * c);
-          std::memcpy(out + c * vertex_bytes, vertices.data() + id * floats, vertex_bytes);
+          std::memcpy(dst + c * vertex_bytes, vertices.data() + id * floats, vertex_bytes);
         }
-        std::memcpy(out + 3 * vertex_bytes, rec + 12, 4);
+        std::memcpy(dst + 3 * vertex_bytes, rec + 12, 4);
       }
-      OCTOLOD_RETURN_IF_ERROR(sink(scratch.first(n * out_bytes)));
+      OCTOLOD_RETURN_IF_ERROR(out.commit(n));
       left -= n;
     }
   }

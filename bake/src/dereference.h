@@ -8,7 +8,6 @@
 #pragma once
 
 #include <cstddef>
-#include <functional>
 #include <span>
 
 #include "octolod/bake/external_sort.h"
@@ -34,23 +33,27 @@ constexpr std::size_t working_vertex_id_offset(VertexLayout layout, int corner) 
 // in-core path, needs only corner 2's id: the sort is stable.)
 SortKeyFn last_corner_key(VertexLayout layout, int filled);
 
-// Receives consecutive output records; the span is valid during the call only.
-using RecordSink = std::function<Status(std::span<const std::byte> records)>;
+// Where a dereference writes its records: reserve() room for between 1 and `max_records`
+// records, fill a prefix, commit() it. Implemented over a RecordSorter (the next pass's sort,
+// zero-copy), a RecordWriter (the soup file) or a caller's sink.
+class RecordOutput {
+ public:
+  virtual ~RecordOutput() = default;
+  virtual Result<std::span<std::byte>> reserve(std::size_t max_records) = 0;
+  virtual Status commit(std::size_t records) = 0;
+};
 
 // Out-of-core pass `corner`: `sorted` yields working records with `corner` corners filled, in
 // ascending order of vertex id `corner`; `vertices` is the vertex file (layout.bytes() records)
-// positioned at its start. Output records (one more corner filled) go to `sink` in batches built
-// in `scratch` (at least one output record). io error if the vertex file is shorter than an id.
+// positioned at its start. Output records (one more corner filled) go to `out`. io error if
+// the vertex file is shorter than an id needs.
 Status dereference_pass(int corner, VertexLayout layout, RecordSorter& sorted,
-                        RecordReader& vertices, std::span<std::byte> scratch,
-                        const RecordSink& sink);
+                        RecordReader& vertices, RecordOutput& out);
 
 // In-core: `sorted` yields TriangleRecords in output order; each becomes a soup record with its
-// three corners copied from `vertices` (vertex_count * layout.floats() floats), handed to `sink`
-// in batches built in `scratch` (at least one soup record). Ids were checked against the vertex
-// count by the PLY reader.
+// three corners copied from `vertices` (vertex_count * layout.floats() floats), written to
+// `out`. Ids were checked against the vertex count by the PLY reader.
 Status dereference_in_core(VertexLayout layout, std::span<const float> vertices,
-                           RecordSorter& sorted, std::span<std::byte> scratch,
-                           const RecordSink& sink);
+                           RecordSorter& sorted, RecordOutput& out);
 
 }  // namespace octolod::bake

@@ -304,19 +304,26 @@ class ExternalSorter final : public RecordSorter {
     std::size_t n = records.size() / record_bytes_;
     const std::byte* src = records.data();
     while (n > 0) {
-      if (!run_.records) {
-        run_.allocate(record_bytes_, run_capacity_);
-        fill_limit_ = run_capacity_;
-      }
-      if (fill_count_ == fill_limit_) OCTOLOD_RETURN_IF_ERROR(make_room());
-      const std::size_t take = std::min(n, fill_limit_ - fill_count_);
-      std::memcpy(run_.record(fill_begin_ + fill_count_), src, take * record_bytes_);
-      fill_count_ += take;
-      stats_.records += take;
-      src += take * record_bytes_;
+      auto space = room(n);
+      if (!space.ok()) return space.status();
+      std::memcpy(space->data(), src, space->size());
+      const std::size_t take = space->size() / record_bytes_;
+      commit(take);
+      src += space->size();
       n -= take;
     }
     return {};
+  }
+
+  Result<std::span<std::byte>> reserve(std::size_t max_records) override {
+    Stopwatch watch(stats_.seconds);
+    return room(max_records);
+  }
+
+  void commit(std::size_t records) override {
+    assert(fill_count_ + records <= fill_limit_ && "RecordSorter::commit beyond reserve()");
+    fill_count_ += records;
+    stats_.records += records;
   }
 
   Status finish() override {
@@ -364,6 +371,18 @@ class ExternalSorter final : public RecordSorter {
 
  private:
   enum class State { input, in_core, merging };
+
+  // reserve() without the stopwatch (push() has its own).
+  Result<std::span<std::byte>> room(std::size_t max_records) {
+    assert(state_ == State::input && "RecordSorter::reserve after finish()");
+    if (!run_.records) {
+      run_.allocate(record_bytes_, run_capacity_);
+      fill_limit_ = run_capacity_;
+    }
+    if (fill_count_ == fill_limit_) OCTOLOD_RETURN_IF_ERROR(make_room());
+    const std::size_t n = std::min(max_records, fill_limit_ - fill_count_);
+    return std::span<std::byte>(run_.record(fill_begin_ + fill_count_), n * record_bytes_);
+  }
 
   // The filled part of the run buffer must go to disk before more records fit. With one thread,
   // or for the first run (so that everything up to the full buffer stays in core), the whole

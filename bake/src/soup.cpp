@@ -6,6 +6,8 @@
 #include <algorithm>
 #include <cstddef>
 #include <chrono>
+#include <cstring>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
@@ -26,6 +28,87 @@ constexpr std::uint64_t kPlyFileBuffer = 64 * 1024;
 double seconds_since(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
+
+// The next pass's sort as an output: records are written straight into its run buffer.
+class SorterOutput final : public RecordOutput {
+ public:
+  explicit SorterOutput(RecordSorter& sorter) : sorter_(sorter) {}
+  Result<std::span<std::byte>> reserve(std::size_t max_records) override {
+    return sorter_.reserve(max_records);
+  }
+  Status commit(std::size_t records) override {
+    sorter_.commit(records);
+    return {};
+  }
+
+ private:
+  RecordSorter& sorter_;
+};
+
+// The soup's destination: the caller's SoupOptions::sink (records batched in `io` bytes) or a
+// new soup file (written through a RecordWriter of `io` bytes).
+class SoupOutput final : public RecordOutput {
+ public:
+  static Result<std::unique_ptr<SoupOutput>> open(const SoupOptions& options, VertexLayout layout,
+                                                  std::size_t io, TempFile& file) {
+    const std::size_t record_bytes = soup_record_bytes(layout);
+    auto out = std::unique_ptr<SoupOutput>(new SoupOutput(record_bytes));
+    if (options.sink) {
+      out->sink_ = &options.sink;
+      out->batch_records_ = std::max<std::size_t>(1, io / record_bytes);
+      out->batch_ = std::make_unique_for_overwrite<std::byte[]>(out->batch_records_ * record_bytes);
+      return out;
+    }
+    file = make_temp_file(options.work_dir, "soup");
+    auto writer = RecordWriter::create(file.path(), record_bytes, io);
+    if (!writer.ok()) return writer.status();
+    out->writer_.emplace(std::move(writer).value());
+    return out;
+  }
+
+  Result<std::span<std::byte>> reserve(std::size_t max_records) override {
+    if (writer_) return writer_->reserve(max_records);
+    return std::span<std::byte>(batch_.get(), std::min(max_records, batch_records_) * record_bytes_);
+  }
+  Status commit(std::size_t records) override {
+    if (writer_) {
+      writer_->commit(records);
+      return {};
+    }
+    return (*sink_)(std::span<const std::byte>(batch_.get(), records * record_bytes_));
+  }
+  Status finish() { return writer_ ? writer_->finish() : Status{}; }
+
+ private:
+  explicit SoupOutput(std::size_t record_bytes) : record_bytes_(record_bytes) {}
+
+  std::size_t record_bytes_;
+  std::optional<RecordWriter> writer_;
+  const std::function<Status(std::span<const std::byte>)>* sink_ = nullptr;
+  std::unique_ptr<std::byte[]> batch_;
+  std::size_t batch_records_ = 0;
+};
+
+// Reports `stage` progress as records are committed to another output.
+class ProgressOutput final : public RecordOutput {
+ public:
+  ProgressOutput(RecordOutput& inner, std::function<void(std::uint64_t done)> report)
+      : inner_(inner), report_(std::move(report)) {}
+  Result<std::span<std::byte>> reserve(std::size_t max_records) override {
+    return inner_.reserve(max_records);
+  }
+  Status commit(std::size_t records) override {
+    OCTOLOD_RETURN_IF_ERROR(inner_.commit(records));
+    done_ += records;
+    report_(done_);
+    return {};
+  }
+
+ private:
+  RecordOutput& inner_;
+  std::function<void(std::uint64_t)> report_;
+  std::uint64_t done_ = 0;
+};
 
 class SoupBuilder {
  public:
@@ -120,13 +203,14 @@ class SoupBuilder {
     OCTOLOD_RETURN_IF_ERROR(triangles.finish());
     progress("dereference", 0, result_.triangle_count);
 
-    OCTOLOD_RETURN_IF_ERROR(open_output());
-    auto scratch = std::make_unique_for_overwrite<std::byte[]>(io_);
+    auto soup = SoupOutput::open(options_, layout_, io_, soup_file_);
+    if (!soup.ok()) return soup.status();
+    ProgressOutput out(*soup.value(), [this](std::uint64_t done) {
+      progress("dereference", done, result_.triangle_count);
+    });
     OCTOLOD_RETURN_IF_ERROR(dereference_in_core(
-        layout_, std::span<const float>(vertices.get(), vertex_count * floats), triangles,
-        std::span<std::byte>(scratch.get(), io_), output_));
-    OCTOLOD_RETURN_IF_ERROR(finish_output());
-    progress("dereference", result_.triangle_count, result_.triangle_count);
+        layout_, std::span<const float>(vertices.get(), vertex_count * floats), triangles, out));
+    OCTOLOD_RETURN_IF_ERROR(soup.value()->finish());
     result_.sorts.push_back(triangles.stats());
     return {};
   }
@@ -159,15 +243,14 @@ class SoupBuilder {
     }
     OCTOLOD_RETURN_IF_ERROR(current->finish());
 
-    // The output (soup writer) exists only once the second sort is gone: in the last pass, or
-    // for the by-triangle sort's output.
-    auto scratch = std::make_unique_for_overwrite<std::byte[]>(io_);
+    // The soup's output exists only once the second sort is gone: in the last pass, or for
+    // the by-triangle sort's output.
+    std::unique_ptr<SoupOutput> soup;
     static constexpr const char* kPassNames[3] = {"dereference 0", "dereference 1",
                                                   "dereference 2"};
     for (int corner = 0; corner < 3; ++corner) {
       const int filled = corner + 1;
       // Where this pass's output goes: the next pass's sort, the final order sort, or the soup.
-      std::unique_ptr<RecordSorter> next;
       const std::size_t out_bytes = working_record_bytes(layout_, filled);
       SortKeyFn key;
       if (filled < 2) {
@@ -179,24 +262,26 @@ class SoupBuilder {
       } else if (options_.order == SoupOrder::by_triangle) {
         key = sort_key_u32_at(soup_triangle_id_offset(layout_), out_bytes);
       }
-      if (!key) OCTOLOD_RETURN_IF_ERROR(open_output());
+      std::unique_ptr<RecordSorter> next;
+      std::unique_ptr<RecordOutput> sorter_output;
       if (key) {
         auto created = RecordSorter::create(out_bytes, std::move(key), sort_options(sort_budget));
         if (!created.ok()) return created.status();
         next = std::move(created).value();
+        sorter_output = std::make_unique<SorterOutput>(*next);
+      } else {
+        auto opened = SoupOutput::open(options_, layout_, io_, soup_file_);
+        if (!opened.ok()) return opened.status();
+        soup = std::move(opened).value();
       }
-      std::uint64_t done = 0;
       const char* stage = kPassNames[corner];
-      const RecordSink sink = [&](std::span<const std::byte> records) {
-        done += records.size() / out_bytes;
-        progress(stage, done, result_.triangle_count);
-        if (next) return next->push(records);
-        return output_(records);
-      };
+      ProgressOutput out(next ? *sorter_output : static_cast<RecordOutput&>(*soup),
+                         [this, stage](std::uint64_t done) {
+                           progress(stage, done, result_.triangle_count);
+                         });
       auto vertices = RecordReader::open(vertex_file.path(), layout_.bytes(), io_);
       if (!vertices.ok()) return vertices.status();
-      OCTOLOD_RETURN_IF_ERROR(dereference_pass(
-          corner, layout_, *current, vertices.value(), std::span<std::byte>(scratch.get(), io_), sink));
+      OCTOLOD_RETURN_IF_ERROR(dereference_pass(corner, layout_, *current, vertices.value(), out));
       result_.sorts.push_back(current->stats());
       current.reset();  // frees its buffers before the next sort merges
       if (!next) break;
@@ -205,41 +290,33 @@ class SoupBuilder {
     }
     vertex_file.remove();
     if (current) {  // SoupOrder::by_triangle: the soup sorted by triangle id
-      OCTOLOD_RETURN_IF_ERROR(open_output());
+      auto opened = SoupOutput::open(options_, layout_, io_, soup_file_);
+      if (!opened.ok()) return opened.status();
+      soup = std::move(opened).value();
+      const std::size_t record_bytes = soup_record_bytes(layout_);
       std::uint64_t done = 0;
       for (;;) {
         auto block = current->next();
         if (!block.ok()) return block.status();
         if (block->empty()) break;
-        OCTOLOD_RETURN_IF_ERROR(output_(block.value()));
-        done += block->size() / soup_record_bytes(layout_);
+        // Through reserve/commit, so a sink sees batches of at most its batch size.
+        const std::byte* src = block->data();
+        std::size_t left = block->size() / record_bytes;
+        while (left > 0) {
+          auto space = soup->reserve(left);
+          if (!space.ok()) return space.status();
+          std::memcpy(space->data(), src, space->size());
+          const std::size_t n = space->size() / record_bytes;
+          OCTOLOD_RETURN_IF_ERROR(soup->commit(n));
+          src += space->size();
+          left -= n;
+        }
+        done += block->size() / record_bytes;
         progress("order", done, result_.triangle_count);
       }
       result_.sorts.push_back(current->stats());
     }
-    return finish_output();
-  }
-
-  // The soup's destination: SoupOptions::sink, or a new soup file through a writer of io_ bytes.
-  Status open_output() {
-    if (options_.sink) {
-      output_ = options_.sink;
-      return {};
-    }
-    soup_file_ = make_temp_file(options_.work_dir, "soup");
-    auto writer = RecordWriter::create(soup_file_.path(), soup_record_bytes(layout_), io_);
-    if (!writer.ok()) return writer.status();
-    soup_writer_.emplace(std::move(writer).value());
-    output_ = [this](std::span<const std::byte> records) {
-      return soup_writer_->append(records.data(), records.size() / soup_writer_->record_bytes());
-    };
-    return {};
-  }
-  Status finish_output() {
-    if (!soup_writer_) return {};
-    Status status = soup_writer_->finish();
-    soup_writer_.reset();
-    return status;
+    return soup->finish();
   }
 
   const SoupOptions& options_;
@@ -250,8 +327,6 @@ class SoupBuilder {
   double split_wall_ = 0;
   double split_sort_seconds_ = 0;
   TempFile soup_file_;
-  std::optional<RecordWriter> soup_writer_;
-  RecordSink output_;
   SoupResult result_;
 };
 

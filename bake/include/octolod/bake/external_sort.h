@@ -76,6 +76,10 @@ class RecordSorter {
 
   // Copies whole records (records.size() a multiple of record_bytes); only before finish().
   virtual Status push(std::span<const std::byte> records) = 0;
+  // Zero-copy push: room for between 1 and `max_records` records inside the run buffer (writing
+  // a run first when it is full); fill a prefix, then commit() it before any other call.
+  virtual Result<std::span<std::byte>> reserve(std::size_t max_records) = 0;
+  virtual void commit(std::size_t records) = 0;
   // Ends the input; runs intermediate merge passes if the fan-in demands them.
   virtual Status finish() = 0;
   // The next sorted records (at least one, or empty after the last); only after finish().
