@@ -452,7 +452,7 @@ class ExternalSorter final : public RecordSorter {
   std::size_t merge_bytes() const {
     return static_cast<std::size_t>(options_.memory_budget_bytes) - out_bytes_;
   }
-  // Bytes one merge input costs per byte of block: the block plus its keys.
+  // Bytes one merge input costs with a block of `block` bytes: the block plus its keys.
   std::size_t input_cost(std::size_t block) const {
     return block + block / record_bytes_ * sizeof(std::uint64_t);
   }
