@@ -15,8 +15,10 @@ namespace octolod::runtime {
 class Executor {
  public:
   virtual ~Executor() = default;
-  // Runs `task` at some later point, possibly on another thread. Thread-safe. Tasks posted by
-  // the runtime own what they use (shared state), so they may outlive the StreamingTree.
+  // Runs `task` at some later point, possibly on another thread. Thread-safe. Every posted task
+  // must run eventually: a StreamingTree posts a bounded number of loader tasks and posts more
+  // only as they finish, so a dropped task stalls its loading. Tasks posted by the runtime own
+  // what they use (shared state), so they may outlive the StreamingTree.
   virtual void post(std::function<void()> task) = 0;
 };
 

@@ -8,6 +8,14 @@
 // that is not resident by a resident substitute (a frame never waits on I/O), then queue loads
 // for what was missing and prefetches for what is likely next.
 //
+// Use:
+//   auto loaders = std::make_shared<ThreadPoolExecutor>(2);
+//   auto tree = StreamingTree::open_directory("baked/rock", loaders, {.max_resident_bytes = 64 << 20});
+//   if (!tree.ok()) { /* tree.status().message() */ }
+//   every frame:
+//     const FrameResult& frame = tree.value()->update(camera);   // never blocks on I/O
+//     for (const DrawItem& d : frame.draws) draw(*d.mesh);       // upload / cache by d.mesh.get()
+//
 // Thread safety: a StreamingTree is used from one thread (the render thread); update() and the
 // accessors must not run concurrently. Loads run on the injected Executor and read through the
 // injected NodeSource; both may be shared by several trees.
