@@ -238,6 +238,28 @@ TEST(Paging, ResidentBytesNeverExceedABudgetSmallerThanTheCut) {
   expect_covering_cut(fx.tree, last, camera);
 }
 
+TEST(Paging, RelaxedTargetReturnsToTheConfiguredOneWhenTheViewAllows) {
+  StreamingOptions options;
+  options.max_resident_bytes = 30000;
+  Fixture fx(3, options);
+  EXPECT_GT(fx.settle_at(front(100.0f)).stats.coarsening, 1.0f);
+  const FrameResult& far = fx.settle_at(front(500.0f));  // the root's finest LOD: 1560 bytes
+  EXPECT_EQ(far.stats.coarsening, 1.0f);
+  EXPECT_EQ(draws_of(far), (std::map<std::uint32_t, std::uint32_t>{{0, 0}}));
+}
+
+TEST(Paging, DrawnMeshesOutliveTheTree) {
+  std::shared_ptr<const NodeMesh> kept;
+  {
+    Fixture fx(3);
+    const FrameResult& frame = fx.settle_at(front(200.0f));
+    ASSERT_FALSE(frame.draws.empty());
+    kept = frame.draws.front().mesh;
+  }
+  ASSERT_TRUE(kept);
+  EXPECT_EQ(kept->triangle_count(), SyntheticTree::kFineTriangles);
+}
+
 TEST(Paging, BudgetForTheWholeCutShowsFallbacksButNeverExceedsIt) {
   StreamingOptions options;
   options.max_resident_bytes = 20000;
