@@ -50,6 +50,7 @@ int main(int argc, char** argv) {
                "Human progress on stderr (default: only when stderr is a terminal)");
   add_sample_command(app, context);
   add_walk_command(app, context);
+  add_export_command(app, context);
 
 
 

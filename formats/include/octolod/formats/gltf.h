@@ -25,8 +25,11 @@ namespace octolod {
 
 // Draco quantization bits per attribute (Draco's range: 1..30; 0 = keep float32 unquantized,
 // which Draco only compresses losslessly and poorly). A value is reproduced within half a
-// quantization step: for positions, (largest bounding-box extent of the mesh) / (2^bits - 1) / 2.
-// The defaults keep a 1 m asset within 0.03 mm and cost about 5-6x less than float32 GLB.
+// quantization step. Positions of all meshes in one file share one grid, the bounding cube of
+// all of them, so a vertex shared by two meshes (neighbouring octree nodes) stays identical and
+// an exported cut stays crack-free; their error is (largest extent of the union bounds) /
+// (2^bits - 1) / 2. The defaults keep a 1 m asset within 0.03 mm; on the 200K-triangle rock
+// sample (all attributes) they make the GLB 14x smaller (6.81 MB -> 0.48 MB).
 struct DracoOptions {
   int position_bits = 14;  // 14: error < extent / 32766
   int normal_bits = 10;    // octahedral; 10 bits: about 0.2 degree
@@ -42,8 +45,9 @@ struct GltfWriteOptions {
   // (about 4/3 larger; handy for diffing and debugging).
   bool binary = true;
   // Compress every primitive with Draco (KHR_draco_mesh_compression, listed as required: there
-  // is no uncompressed fallback). Lossy by the quantization in `draco_options`; vertex order
-  // changes, the triangle count does not.
+  // is no uncompressed fallback). Lossy by the quantization in `draco_options`; vertex and
+  // triangle order change, vertices on non-manifold edges may be duplicated. Every triangle is
+  // kept except those repeating a vertex index (Edgebreaker cannot encode them).
   bool draco = false;
   DracoOptions draco_options;
   // Node and mesh names: empty (names "mesh_0", "mesh_1", ...) or exactly one per mesh.

@@ -1,0 +1,116 @@
+// octolod export: writes one uniform cut of a baked tree (every node at one error target, or at
+// one octree depth) as a glTF/GLB file with one mesh per node LOD, optionally Draco-compressed —
+// for viewing a bake in any glTF viewer or handing a fixed LOD to an engine.
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+#include <optional>
+#include <string>
+#include <system_error>
+#include <vector>
+
+#include "command.h"
+#include "octolod/formats/gltf.h"
+#include "octolod/formats/manifest.h"
+#include "tree_cut.h"
+
+namespace octolod::cli {
+namespace {
+
+struct ExportArgs {
+  std::string tree;
+  std::optional<double> error;
+  std::optional<std::uint32_t> level;
+  std::string output;
+  bool draco = false;
+  DracoOptions draco_options;
+};
+
+// "root/lod1", "3/5/lod0": the node's directory and the LOD index.
+std::string mesh_name(const NodeInfo& node, std::uint32_t lod) {
+  return (node.path.empty() ? std::string("root") : node.path) + "/lod" + std::to_string(lod);
+}
+
+int run_export(const ExportArgs& args, const CommandContext& context) {
+  if (args.error && !(*args.error >= 0 && std::isfinite(*args.error)))
+    return report(usage_error("--error must be a finite distance >= 0 (model units)"));
+  const auto start = std::chrono::steady_clock::now();
+  const std::filesystem::path root = args.tree;
+  Result<Manifest> manifest = read_manifest(root / std::string(kManifestFileName));
+  if (!manifest.ok()) return report(manifest.status());
+
+  const std::vector<CutEntry> cut = args.error ? uniform_error_cut(manifest.value(), *args.error)
+                                               : depth_cut(manifest.value(), *args.level);
+  Result<std::vector<NodeMesh>> meshes = load_cut(root, manifest.value(), cut);
+  if (!meshes.ok()) return report(meshes.status());
+
+  GltfWriteOptions options;
+  options.binary = std::filesystem::path(args.output).extension() != ".gltf";
+  options.draco = args.draco;
+  options.draco_options = args.draco_options;
+  std::uint64_t triangles = 0, vertices = 0;
+  for (std::size_t i = 0; i < cut.size(); ++i) {
+    options.names.push_back(mesh_name(manifest->nodes[cut[i].node], cut[i].lod));
+    triangles += meshes.value()[i].triangle_count();
+    vertices += meshes.value()[i].vertex_count();
+  }
+  const Status written = write_gltf(args.output, meshes.value(), options);
+  if (!written.ok()) return report(written);
+
+  std::error_code ec;
+  const std::uintmax_t bytes = std::filesystem::file_size(args.output, ec);
+  if (ec) return report(io_error(args.output + ": cannot stat the written file: " + ec.message()));
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const CutSummary summary = summarize_cut(manifest.value(), cut);
+  if (context.json) {
+    print_json({{"file", args.output},
+                {"format", options.binary ? "glb" : "gltf"},
+                {"draco", args.draco},
+                {"meshes", cut.size()},
+                {"triangles", triangles},
+                {"vertices", vertices},
+                {"max_error", summary.max_error},
+                {"bytes", bytes},
+                {"seconds", seconds}});
+  } else {
+    std::printf("%s: %zu meshes, %llu triangles, max error %g, %.2f MB%s in %.2f s\n",
+                args.output.c_str(), cut.size(), static_cast<unsigned long long>(triangles),
+                summary.max_error, static_cast<double>(bytes) / 1e6, args.draco ? " (Draco)" : "",
+                seconds);
+  }
+  return 0;
+}
+
+}  // namespace
+
+void add_export_command(CLI::App& app, CommandContext& context) {
+  auto args = std::make_shared<ExportArgs>();
+  CLI::App* command = app.add_subcommand(
+      "export", "Write a uniform cut of a baked tree as glTF/GLB, one mesh per node LOD");
+  command->add_option("tree", args->tree, "Baked tree directory (holds manifest.json)")->required();
+  CLI::Option* error = command->add_option(
+      "--error", args->error,
+      "Per node, the coarsest LOD whose stored error is <= E (model units)");
+  CLI::Option* level = command->add_option(
+      "--level", args->level, "The nodes at octree depth K (and leaves above it), finest LOD each");
+  error->excludes(level);
+  command->add_option("-o,--output", args->output, "Output file: .glb, or .gltf for embedded JSON")
+      ->required();
+  command->add_flag("--draco", args->draco,
+                    "Compress with Draco (KHR_draco_mesh_compression; lossy, see --position-bits)");
+  command
+      ->add_option("--position-bits", args->draco_options.position_bits,
+                   "Draco position quantization bits (1..30) over the cut's bounding cube")
+      ->capture_default_str();
+  command->callback([args, error, level, &context] {
+    if (error->count() + level->count() != 1) {
+      context.exit_code = report(usage_error("export: give exactly one of --error E or --level K"));
+      return;
+    }
+    context.exit_code = run_export(*args, context);
+  });
+}
+
+}  // namespace octolod::cli
