@@ -1,7 +1,8 @@
 // glTF/GLB export and import: exact round trips, Draco within its quantization, GLB container
 // validity, clean errors on malformed files, and `octolod export` on a hand-built tree.
+#include "octolod/formats/gltf.h"
+
 #include <gtest/gtest.h>
-#include <nlohmann/json.hpp>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -15,11 +16,11 @@
 #include <fstream>
 #include <functional>
 #include <map>
+#include <nlohmann/json.hpp>
 #include <random>
 #include <set>
 #include <string>
 
-#include "octolod/formats/gltf.h"
 #include "octolod/formats/manifest.h"
 #include "octolod/formats/node_file.h"
 
@@ -58,8 +59,8 @@ NodeMesh grid_mesh(int n, float x0 = 0) {
       const float h = 0.1f * std::sin(6 * u) * std::cos(5 * v);
       const float nx = -0.3f * std::cos(6 * u), ny = 0.2f * std::sin(5 * v);
       const float len = std::sqrt(nx * nx + ny * ny + 1);
-      mesh.vertices.insert(mesh.vertices.end(),
-                           {x0 + u, v, h, nx / len, ny / len, 1 / len, u, v, 0.5f * (u + v), u * 3, v * 2});
+      mesh.vertices.insert(mesh.vertices.end(), {x0 + u, v, h, nx / len, ny / len, 1 / len, u, v,
+                                                 0.5f * (u + v), u * 3, v * 2});
     }
   for (int j = 0; j + 1 < n; ++j)
     for (int i = 0; i + 1 < n; ++i) {
@@ -206,7 +207,8 @@ TEST(Gltf, ThirtyTwoBitIndicesPastSixtyFiveThousandVertices) {
 }
 
 TEST(Gltf, WritesOneNamedNodeAndMeshPerNodeMeshWithPositionBounds) {
-  const std::vector<NodeMesh> meshes = {quad_mesh({}, 0.5f), quad_mesh({true, false, false}, -2.0f)};
+  const std::vector<NodeMesh> meshes = {quad_mesh({}, 0.5f),
+                                        quad_mesh({true, false, false}, -2.0f)};
   const std::vector<std::byte> glb = encode(meshes, named({"root/lod1", "3/5/lod0"}));
   const json document = glb_json(glb);
   ASSERT_EQ(document["nodes"].size(), 2u);
@@ -267,7 +269,8 @@ TEST(Gltf, GlbHasMagicVersionTwoAndConsistentChunkLengths) {
     EXPECT_LE(document["buffers"][0]["byteLength"].get<std::size_t>(), bin_length);
     EXPECT_FALSE(document["buffers"][0].contains("uri"));
     for (const json& view : document["bufferViews"])
-      EXPECT_LE(view.value("byteOffset", std::size_t{0}) + view["byteLength"].get<std::size_t>(), bin_length);
+      EXPECT_LE(view.value("byteOffset", std::size_t{0}) + view["byteLength"].get<std::size_t>(),
+                bin_length);
   }
 }
 
@@ -328,7 +331,8 @@ TEST(Gltf, DracoRoundTripStaysWithinQuantizationAndKeepsTriangles) {
     const std::uint32_t f = mesh.layout.floats();
     for (std::size_t d = 0; d < decoded.vertex_count(); ++d) {
       for (std::size_t k = 0; k < 3; ++k)
-        ASSERT_NEAR(decoded.vertices[d * f + k], mesh.vertices[match[d] * f + k], tolerance) << bits;
+        ASSERT_NEAR(decoded.vertices[d * f + k], mesh.vertices[match[d] * f + k], tolerance)
+            << bits;
       // Normals within ~0.5 degree (10 bits octahedral), colours within 1/255, UVs within 1/2^12.
       for (std::size_t k = 3; k < 6; ++k)
         EXPECT_NEAR(decoded.vertices[d * f + k], mesh.vertices[match[d] * f + k], 0.01);
@@ -342,7 +346,9 @@ TEST(Gltf, DracoRoundTripStaysWithinQuantizationAndKeepsTriangles) {
 
     // POSITION min/max describe the decoded data exactly.
     const json document = glb_json(glb);
-    const json& position = document["accessors"][document["meshes"][0]["primitives"][0]["attributes"]["POSITION"].get<int>()];
+    const json& position =
+        document["accessors"]
+                [document["meshes"][0]["primitives"][0]["attributes"]["POSITION"].get<int>()];
     const Bounds decoded_bounds = decoded.bounds();
     for (std::size_t k = 0; k < 3; ++k) {
       EXPECT_EQ(position["min"][k].get<float>(), decoded_bounds.min[k]);
@@ -360,7 +366,8 @@ TEST(Gltf, DracoDropsOnlyTrianglesThatRepeatAVertex) {
   NodeMesh mesh;
   mesh.vertices = {0, 0, 0, 1, 0, 0, 0, 1, 0, 1, 1, 0, 0, 0, 0, 2, 0, 0};
   mesh.indices = {0, 1, 2, 2, 1, 3, 0, 1, 2, 4, 1, 5, 0, 0, 1};
-  Result<std::vector<NodeMesh>> back = decode_gltf(encode(std::span(&mesh, 1), draco_options(true)), "d.glb");
+  Result<std::vector<NodeMesh>> back =
+      decode_gltf(encode(std::span(&mesh, 1), draco_options(true)), "d.glb");
   ASSERT_TRUE(back.ok()) << back.status().message();
   EXPECT_EQ(back->front().triangle_count(), 4u);
 }
@@ -374,7 +381,8 @@ TEST(Gltf, DracoFileDeclaresTheExtensionAndHasNoUncompressedData) {
   EXPECT_EQ(document["extensionsUsed"], json::array({"KHR_draco_mesh_compression"}));
   EXPECT_EQ(document["extensionsRequired"], json::array({"KHR_draco_mesh_compression"}));
   for (const json& accessor : document["accessors"]) EXPECT_FALSE(accessor.contains("bufferView"));
-  const json& extension = document["meshes"][0]["primitives"][0]["extensions"]["KHR_draco_mesh_compression"];
+  const json& extension =
+      document["meshes"][0]["primitives"][0]["extensions"]["KHR_draco_mesh_compression"];
   EXPECT_TRUE(extension["attributes"].contains("TEXCOORD_0"));
   EXPECT_EQ(document["bufferViews"].size(), 1u);
 }
@@ -392,7 +400,9 @@ NodeMesh split_by_x(const NodeMesh& mesh, float x, bool below) {
     for (std::size_t k = 0; k < 3; ++k) {
       const std::uint32_t i = mesh.indices[3 * t + k];
       auto [it, added] = remap.try_emplace(i, static_cast<std::uint32_t>(out.vertex_count()));
-      if (added) out.vertices.insert(out.vertices.end(), mesh.vertices.begin() + i * f, mesh.vertices.begin() + (i + 1) * f);
+      if (added)
+        out.vertices.insert(out.vertices.end(), mesh.vertices.begin() + i * f,
+                            mesh.vertices.begin() + (i + 1) * f);
       out.indices.push_back(it->second);
     }
   }
@@ -404,8 +414,10 @@ NodeMesh split_by_x(const NodeMesh& mesh, float x, bool below) {
 // with Draco has no cracks.
 TEST(Gltf, DracoKeepsVerticesSharedBetweenMeshesIdentical) {
   const NodeMesh whole = grid_mesh(17);
-  const std::vector<NodeMesh> meshes = {split_by_x(whole, 0.5f, true), split_by_x(whole, 0.5f, false)};
-  Result<std::vector<NodeMesh>> back = decode_gltf(encode(meshes, draco_options(true, 9)), "pair.glb");
+  const std::vector<NodeMesh> meshes = {split_by_x(whole, 0.5f, true),
+                                        split_by_x(whole, 0.5f, false)};
+  Result<std::vector<NodeMesh>> back =
+      decode_gltf(encode(meshes, draco_options(true, 9)), "pair.glb");
   ASSERT_TRUE(back.ok()) << back.status().message();
   auto seam = [](const NodeMesh& m) {
     std::set<std::array<float, 3>> points;  // decoded vertices within one 9-bit step of x = 0.5
@@ -500,13 +512,18 @@ TEST(Gltf, InconsistentStructureIsBadInputWithWhatWasWrong) {
     std::function<void(json&)> edit;
   };
   const std::vector<Case> cases = {
-      {"accessors index 99 out of range", [](json& d) { d["meshes"][0]["primitives"][0]["indices"] = 99; }},
+      {"accessors index 99 out of range",
+       [](json& d) { d["meshes"][0]["primitives"][0]["indices"] = 99; }},
       {"overrun its bufferView", [](json& d) { d["accessors"][0]["count"] = 1000; }},
       {"exceed the buffer", [](json& d) { d["bufferViews"][0]["byteLength"] = 100000; }},
-      {"no POSITION", [](json& d) { d["meshes"][0]["primitives"][0]["attributes"].erase("POSITION"); }},
+      {"no POSITION",
+       [](json& d) { d["meshes"][0]["primitives"][0]["attributes"].erase("POSITION"); }},
       {"not a non-negative integer", [](json& d) { d["accessors"][0]["count"] = -4; }},
       {"'buffers' is not an array", [](json& d) { d["buffers"] = 3; }},
-      {"no uri and there is no GLB BIN chunk", [](json& d) { d["buffers"].push_back({{"byteLength", 4}}); }},
+      {"no uri and there is no GLB BIN chunk",
+       [](json& d) {
+         d["buffers"].push_back({{"byteLength", 4}});
+       }},
       {"values for 4 vertices", [](json& d) { d["accessors"][1]["count"] = 3; }},
   };
   for (const Case& c : cases) {
@@ -521,7 +538,9 @@ TEST(Gltf, InconsistentStructureIsBadInputWithWhatWasWrong) {
   std::vector<std::byte> bin = glb_bin(glb);
   const json document = glb_json(glb);
   const int indices = document["meshes"][0]["primitives"][0]["indices"];
-  const std::size_t at = document["bufferViews"][document["accessors"][indices]["bufferView"].get<int>()]["byteOffset"];
+  const std::size_t at =
+      document["bufferViews"][document["accessors"][indices]["bufferView"].get<int>()]
+              ["byteOffset"];
   bin[at] = std::byte{4};
   Result<std::vector<NodeMesh>> r = decode_gltf(make_glb(document, bin), "index.glb");
   ASSERT_FALSE(r.ok());
@@ -556,9 +575,7 @@ TEST(Gltf, RejectsInconsistentMeshesAndOptions) {
 
   const NodeMesh mesh = quad_mesh({});
   EXPECT_EQ(encode_gltf(std::span(&mesh, 1), named({"a", "b"})).status().code(), ErrorCode::usage);
-  EXPECT_EQ(encode_gltf(std::span(&mesh, 1), draco_options(true, 31))
-                .status()
-                .code(),
+  EXPECT_EQ(encode_gltf(std::span(&mesh, 1), draco_options(true, 31)).status().code(),
             ErrorCode::usage);
 }
 
@@ -593,7 +610,12 @@ TEST(Gltf, ReadsStridedNormalizedNonIndexedMultiPrimitiveFiles) {
         {{"buffer", 0}, {"byteOffset", second_indices}, {"byteLength", 3}}}},
       {"accessors",
        {{{"bufferView", 0}, {"componentType", 5126}, {"count", 3}, {"type", "VEC3"}},
-        {{"bufferView", 0}, {"byteOffset", 12}, {"componentType", 5121}, {"normalized", true}, {"count", 3}, {"type", "VEC4"}},
+        {{"bufferView", 0},
+         {"byteOffset", 12},
+         {"componentType", 5121},
+         {"normalized", true},
+         {"count", 3},
+         {"type", "VEC4"}},
         {{"bufferView", 1}, {"componentType", 5126}, {"count", 3}, {"type", "VEC3"}},
         {{"bufferView", 2}, {"componentType", 5121}, {"count", 3}, {"type", "SCALAR"}}}},
       {"meshes",
@@ -608,8 +630,8 @@ TEST(Gltf, ReadsStridedNormalizedNonIndexedMultiPrimitiveFiles) {
   const NodeMesh& colored = r.value()[0];
   EXPECT_EQ(colored.layout, (VertexLayout{false, true, false}));
   EXPECT_EQ(colored.indices, (std::vector<std::uint32_t>{0, 1, 2}));
-  EXPECT_EQ(colored.vertices, (std::vector<float>{0, 0, 0, 1, 0.2f, 0.2f, 1, 0, 0, 0.2f, 1, 0.2f,
-                                                  0, 1, 0, 0.2f, 0.2f, 1}));
+  EXPECT_EQ(colored.vertices, (std::vector<float>{0, 0, 0, 1, 0.2f, 0.2f, 1, 0, 0, 0.2f, 1, 0.2f, 0,
+                                                  1, 0, 0.2f, 0.2f, 1}));
   const NodeMesh& merged = r.value()[1];
   EXPECT_EQ(merged.layout, VertexLayout{});
   EXPECT_EQ(merged.indices, (std::vector<std::uint32_t>{0, 1, 2, 5, 4, 3}));
@@ -633,7 +655,8 @@ TEST(Gltf, WriteGltfIsAtomicAndReadGltfReadsItBack) {
     EXPECT_EQ(back.value(), meshes);
   }
   std::size_t files = 0;
-  for ([[maybe_unused]] const auto& entry : std::filesystem::directory_iterator(dir.path())) ++files;
+  for ([[maybe_unused]] const auto& entry : std::filesystem::directory_iterator(dir.path()))
+    ++files;
   EXPECT_EQ(files, 2u) << "no temporary files left behind";
 }
 
@@ -691,7 +714,8 @@ void write_tree(const std::filesystem::path& root) {
     for (int q = 0; q < quads; ++q) {
       NodeMesh quad = quad_mesh(layout, 0.5f);
       const auto base = static_cast<std::uint32_t>(m.vertex_count());
-      for (std::size_t v = 0; v < quad.vertex_count(); ++v) quad.vertices[v * layout.floats()] += x0 + static_cast<float>(q);
+      for (std::size_t v = 0; v < quad.vertex_count(); ++v)
+        quad.vertices[v * layout.floats()] += x0 + static_cast<float>(q);
       m.vertices.insert(m.vertices.end(), quad.vertices.begin(), quad.vertices.end());
       for (std::uint32_t i : quad.indices) m.indices.push_back(base + i);
     }
@@ -766,8 +790,8 @@ TEST(GltfExport, WritesTheUniformCutAsOneNamedMeshPerNodeLod) {
   for (bool draco : {false, true}) {
     for (const Case& c : cases) {
       const std::filesystem::path out = dir.path() / (draco ? "cut_draco.glb" : "cut.glb");
-      const auto [code, stdout_text] = run_cli("--json export " + tree.string() + " " + c.args + " -o " +
-                                               out.string() + (draco ? " --draco" : ""));
+      const auto [code, stdout_text] = run_cli("--json export " + tree.string() + " " + c.args +
+                                               " -o " + out.string() + (draco ? " --draco" : ""));
       ASSERT_EQ(code, 0) << c.args;
       const json report = json::parse(stdout_text);
       EXPECT_EQ(report["meshes"], c.names.size());
@@ -777,7 +801,8 @@ TEST(GltfExport, WritesTheUniformCutAsOneNamedMeshPerNodeLod) {
 
       std::ifstream in(out, std::ios::binary);
       std::vector<char> raw((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-      const std::span<const std::byte> bytes(reinterpret_cast<const std::byte*>(raw.data()), raw.size());
+      const std::span<const std::byte> bytes(reinterpret_cast<const std::byte*>(raw.data()),
+                                             raw.size());
       const json document = glb_json(bytes);
       std::vector<std::string> names;
       for (const json& node : document["nodes"]) names.push_back(node["name"]);
@@ -795,7 +820,8 @@ TEST(GltfExport, ReportsUsageAndMissingTreeErrors) {
   if (std::getenv("OCTOLOD_CLI") == nullptr) GTEST_SKIP() << "OCTOLOD_CLI not set";
   TempDir dir;
   const std::string out = (dir.path() / "x.glb").string();
-  EXPECT_EQ(run_cli("export " + dir.path().string() + " --error 1 -o " + out).first, 4);  // no manifest
+  EXPECT_EQ(run_cli("export " + dir.path().string() + " --error 1 -o " + out).first,
+            4);  // no manifest
   write_tree(dir.path());
   EXPECT_EQ(run_cli("export " + dir.path().string() + " -o " + out).first, 1);  // no cut given
   EXPECT_EQ(run_cli("export " + dir.path().string() + " --error 1 --level 2 -o " + out).first, 1);

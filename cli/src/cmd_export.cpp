@@ -62,7 +62,8 @@ int run_export(const ExportArgs& args, const CommandContext& context) {
   std::error_code ec;
   const std::uintmax_t bytes = std::filesystem::file_size(args.output, ec);
   if (ec) return report(io_error(args.output + ": cannot stat the written file: " + ec.message()));
-  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   const CutSummary summary = summarize_cut(manifest.value(), cut);
   if (context.json) {
     print_json({{"file", args.output},
@@ -90,9 +91,9 @@ void add_export_command(CLI::App& app, CommandContext& context) {
   CLI::App* command = app.add_subcommand(
       "export", "Write a uniform cut of a baked tree as glTF/GLB, one mesh per node LOD");
   command->add_option("tree", args->tree, "Baked tree directory (holds manifest.json)")->required();
-  CLI::Option* error = command->add_option(
-      "--error", args->error,
-      "Per node, the coarsest LOD whose stored error is <= E (model units)");
+  CLI::Option* error =
+      command->add_option("--error", args->error,
+                          "Per node, the coarsest LOD whose stored error is <= E (model units)");
   CLI::Option* level = command->add_option(
       "--level", args->level, "The nodes at octree depth K (and leaves above it), finest LOD each");
   error->excludes(level);

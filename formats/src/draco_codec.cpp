@@ -57,7 +57,8 @@ Status read_attribute(const draco::Mesh& mesh, int id, std::uint8_t components,
   for (std::uint32_t p = 0; p < mesh.num_points(); ++p) {
     const draco::AttributeValueIndex index = attribute->mapped_index(draco::PointIndex(p));
     if (index.value() >= attribute->size() ||
-        !attribute->ConvertValue<float>(index, attribute->num_components(), value))
+        !attribute->ConvertValue<float>(
+            index, static_cast<std::int8_t>(attribute->num_components()), value))
       return bad_input_error(std::string(name) + ": Draco " + what +
                              " attribute has no value for point " + std::to_string(p));
     std::copy(value, value + components, out.vertices.data() + std::size_t{p} * stride + offset);
@@ -71,7 +72,7 @@ DracoPositionGrid DracoPositionGrid::enclosing(const Bounds& bounds) {
   DracoPositionGrid grid;
   if (bounds.empty()) return grid;
   float extent = 0;
-  for (int i = 0; i < 3; ++i) extent = std::max(extent, bounds.max[i] - bounds.min[i]);
+  for (std::size_t i = 0; i < 3; ++i) extent = std::max(extent, bounds.max[i] - bounds.min[i]);
   grid.origin = bounds.min;
   // Draco maps origin + range to the top quantization level; a zero range (one point) would
   // divide by zero.
@@ -108,9 +109,8 @@ Result<DracoPayload> draco_encode(const NodeMesh& mesh, const DracoOptions& opti
   const int speed = 10 - options.compression_level;
   encoder.SetSpeedOptions(speed, speed);
   encoder.SetEncodingMethod(draco::MESH_EDGEBREAKER_ENCODING);
-  encoder.SetAttributeExplicitQuantization(draco::GeometryAttribute::POSITION,
-                                           options.position_bits, 3, grid.origin.data(),
-                                           grid.range);
+  encoder.SetAttributeExplicitQuantization(
+      draco::GeometryAttribute::POSITION, options.position_bits, 3, grid.origin.data(), grid.range);
   encoder.SetAttributeQuantization(draco::GeometryAttribute::NORMAL, options.normal_bits);
   encoder.SetAttributeQuantization(draco::GeometryAttribute::COLOR, options.color_bits);
   encoder.SetAttributeQuantization(draco::GeometryAttribute::TEX_COORD, options.uv_bits);
@@ -118,8 +118,8 @@ Result<DracoPayload> draco_encode(const NodeMesh& mesh, const DracoOptions& opti
   draco::EncoderBuffer buffer;
   const draco::Status encoded = encoder.EncodeMeshToBuffer(out, &buffer);
   if (!encoded.ok())
-    return bad_input_error(std::string(name) + ": Draco encoding failed: " +
-                           encoded.error_msg_string());
+    return bad_input_error(std::string(name) +
+                           ": Draco encoding failed: " + encoded.error_msg_string());
   const auto* data = reinterpret_cast<const std::byte*>(buffer.data());
   payload.bytes.assign(data, data + buffer.size());
   return payload;
@@ -134,8 +134,8 @@ Result<NodeMesh> draco_decode(std::span<const std::byte> bytes, const DracoAttri
   draco::Decoder decoder;
   auto decoded = decoder.DecodeMeshFromBuffer(&buffer);
   if (!decoded.ok())
-    return bad_input_error(std::string(name) + ": invalid Draco payload: " +
-                           decoded.status().error_msg_string());
+    return bad_input_error(std::string(name) +
+                           ": invalid Draco payload: " + decoded.status().error_msg_string());
   const draco::Mesh& mesh = *decoded.value();
 
   NodeMesh out;
@@ -144,8 +144,8 @@ Result<NodeMesh> draco_decode(std::span<const std::byte> bytes, const DracoAttri
   if (points > static_cast<std::uint32_t>(std::numeric_limits<std::int32_t>::max()))
     return bad_input_error(std::string(name) + ": Draco payload with too many points");
   out.vertices.resize(std::size_t{points} * out.layout.floats());
-  OCTOLOD_RETURN_IF_ERROR(
-      read_attribute(mesh, ids.position, 3, VertexLayout::position_offset(), out, name, "POSITION"));
+  OCTOLOD_RETURN_IF_ERROR(read_attribute(mesh, ids.position, 3, VertexLayout::position_offset(),
+                                         out, name, "POSITION"));
   if (ids.normal >= 0)
     OCTOLOD_RETURN_IF_ERROR(
         read_attribute(mesh, ids.normal, 3, VertexLayout::normal_offset(), out, name, "NORMAL"));

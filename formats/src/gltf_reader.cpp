@@ -5,14 +5,13 @@
 // without Draco and rejects the bufferView-less index accessors of Draco primitives, and its
 // loader indexes buffers and views unchecked on malformed input. Every count, offset and index
 // below is range-checked before use, so any byte string yields a mesh or a bad_input Status.
-#include <nlohmann/json.hpp>
-
 #include <algorithm>
 #include <array>
 #include <cstdio>
 #include <cstring>
 #include <deque>
 #include <limits>
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
 
@@ -25,9 +24,9 @@ namespace {
 
 using nlohmann::json;
 
-constexpr std::uint32_t kGlbMagic = 0x46546C67;      // "glTF"
-constexpr std::uint32_t kChunkJson = 0x4E4F534A;     // "JSON"
-constexpr std::uint32_t kChunkBin = 0x004E4942;      // "BIN\0"
+constexpr std::uint32_t kGlbMagic = 0x46546C67;   // "glTF"
+constexpr std::uint32_t kChunkJson = 0x4E4F534A;  // "JSON"
+constexpr std::uint32_t kChunkBin = 0x004E4942;   // "BIN\0"
 constexpr int kFloat = 5126, kUnsignedByte = 5121, kUnsignedShort = 5123, kUnsignedInt = 5125;
 constexpr const char* kDracoExtension = "KHR_draco_mesh_compression";
 
@@ -111,9 +110,9 @@ NodeMesh restrict_layout(const NodeMesh& mesh, VertexLayout layout) {
 // What an attribute accessor may hold: the glTF 2.0 core types for each attribute (3.7.2.1).
 struct AttributeSpec {
   const char* semantic;
-  std::uint32_t components;      // floats written per vertex
-  bool allow_vec4;               // colours: alpha is read and dropped
-  bool allow_normalized_ints;    // unsigned byte/short, normalized to 0..1
+  std::uint32_t components;    // floats written per vertex
+  bool allow_vec4;             // colours: alpha is read and dropped
+  bool allow_normalized_ints;  // unsigned byte/short, normalized to 0..1
 };
 
 class GltfDecoder {
@@ -152,14 +151,16 @@ class GltfDecoder {
   // GLB: 12-byte header (magic, version, length), then chunks (length, type, data); the first
   // chunk is JSON, an optional BIN chunk follows, unknown chunks are skipped.
   Status split_glb(std::span<const std::byte> bytes, std::span<const std::byte>& json_text) {
-    if (bytes.size() < 12) return fail("truncated GLB header (" + std::to_string(bytes.size()) + " bytes)");
+    if (bytes.size() < 12)
+      return fail("truncated GLB header (" + std::to_string(bytes.size()) + " bytes)");
     const auto version = detail::load_le<std::uint32_t>(bytes, 4);
     if (version == 1) return unsupported("GLB version 1 (glTF 1.0); only glTF 2.0 is read");
     if (version != 2) return fail("GLB version " + std::to_string(version) + ", expected 2");
     const auto length = detail::load_le<std::uint32_t>(bytes, 8);
     if (length != bytes.size())
-      return fail("GLB header gives a length of " + std::to_string(length) + " bytes, the data has " +
-                  std::to_string(bytes.size()) + (length > bytes.size() ? " (truncated)" : ""));
+      return fail("GLB header gives a length of " + std::to_string(length) +
+                  " bytes, the data has " + std::to_string(bytes.size()) +
+                  (length > bytes.size() ? " (truncated)" : ""));
     bool have_json = false;
     for (std::size_t offset = 12; offset < bytes.size();) {
       if (bytes.size() - offset < 8)
@@ -191,9 +192,11 @@ class GltfDecoder {
     doc_ = json::parse(begin, begin + text.size(), nullptr, false);
     if (doc_.is_discarded()) return fail("not glTF: the JSON does not parse");
     if (!doc_.is_object()) return fail("not glTF: the JSON is not an object");
-    for (const char* key : {"meshes", "accessors", "bufferViews", "buffers", "extensionsRequired"}) {
+    for (const char* key :
+         {"meshes", "accessors", "bufferViews", "buffers", "extensionsRequired"}) {
       auto it = doc_.find(key);
-      if (it != doc_.end() && !it->is_array()) return fail(std::string("'") + key + "' is not an array");
+      if (it != doc_.end() && !it->is_array())
+        return fail(std::string("'") + key + "' is not an array");
     }
     return {};
   }
@@ -208,7 +211,8 @@ class GltfDecoder {
     for (const json& required : array("extensionsRequired")) {
       if (!required.is_string()) return fail("extensionsRequired holds a non-string");
       if (required.get_ref<const std::string&>() != kDracoExtension)
-        return unsupported("required extension " + required.get<std::string>() + " is not supported");
+        return unsupported("required extension " + required.get<std::string>() +
+                           " is not supported");
     }
     return {};
   }
@@ -234,13 +238,15 @@ class GltfDecoder {
   }
 
   // An element of a top-level array, by an index taken from the file.
-  Result<const json*> element(const char* array_name, std::uint64_t index, const std::string& where) const {
+  Result<const json*> element(const char* array_name, std::uint64_t index,
+                              const std::string& where) const {
     const json& items = array(array_name);
     if (index >= items.size())
-      return fail(where + ": " + array_name + " index " + std::to_string(index) + " out of range (" +
-                  std::to_string(items.size()) + " entries)");
+      return fail(where + ": " + array_name + " index " + std::to_string(index) +
+                  " out of range (" + std::to_string(items.size()) + " entries)");
     const json& item = items[static_cast<std::size_t>(index)];
-    if (!item.is_object()) return fail(where + ": " + array_name + "[" + std::to_string(index) + "] is not an object");
+    if (!item.is_object())
+      return fail(where + ": " + array_name + "[" + std::to_string(index) + "] is not an object");
     return &item;
   }
 
@@ -256,11 +262,13 @@ class GltfDecoder {
       std::span<const std::byte> data;
       auto uri = buffers[i].find("uri");
       if (uri == buffers[i].end()) {
-        if (i != 0 || !bin_) return fail(where + " has no uri and there is no GLB BIN chunk for it");
+        if (i != 0 || !bin_)
+          return fail(where + " has no uri and there is no GLB BIN chunk for it");
         data = *bin_;
       } else {
         if (!uri->is_string()) return fail(where + ": uri is not a string");
-        Result<std::span<const std::byte>> loaded = load_uri(uri->get_ref<const std::string&>(), where);
+        Result<std::span<const std::byte>> loaded =
+            load_uri(uri->get_ref<const std::string&>(), where);
         if (!loaded.ok()) return loaded.status();
         data = loaded.value();
       }
@@ -285,8 +293,9 @@ class GltfDecoder {
     if (base_dir_ == nullptr || uri.find("://") != std::string::npos)
       return unsupported(where + ": external buffer '" + uri + "' (only self-contained data here)");
     Result<std::vector<std::byte>> bytes = read_file(*base_dir_ / uri);
-    if (!bytes.ok()) return Status(bytes.status().code(), std::string(name_) + ": " + where + ": " +
-                                                              bytes.status().message());
+    if (!bytes.ok())
+      return Status(bytes.status().code(),
+                    std::string(name_) + ": " + where + ": " + bytes.status().message());
     owned_.push_back(std::move(bytes).value());
     return std::span<const std::byte>(owned_.back());
   }
@@ -302,7 +311,8 @@ class GltfDecoder {
     const std::string at = where + ": bufferView " + std::to_string(index);
     Result<std::uint64_t> buffer = count_member(*object.value(), "buffer", at);
     if (!buffer.ok()) return buffer.status();
-    if (buffer.value() >= buffers_.size()) return fail(at + ": buffer " + std::to_string(buffer.value()) + " out of range");
+    if (buffer.value() >= buffers_.size())
+      return fail(at + ": buffer " + std::to_string(buffer.value()) + " out of range");
     Result<std::uint64_t> offset = count_member(*object.value(), "byteOffset", at, 0);
     if (!offset.ok()) return offset.status();
     Result<std::uint64_t> length = count_member(*object.value(), "byteLength", at);
@@ -311,10 +321,13 @@ class GltfDecoder {
     if (!stride.ok()) return stride.status();
     const std::span<const std::byte> data = buffers_[static_cast<std::size_t>(buffer.value())];
     if (length.value() > data.size() || offset.value() > data.size() - length.value())
-      return fail(at + ": bytes " + std::to_string(offset.value()) + "+" + std::to_string(length.value()) +
-                  " exceed the buffer's " + std::to_string(data.size()));
-    if (stride.value() > 252) return fail(at + ": byteStride " + std::to_string(stride.value()) + " > 252");
-    return View{data.subspan(static_cast<std::size_t>(offset.value()), static_cast<std::size_t>(length.value())),
+      return fail(at + ": bytes " + std::to_string(offset.value()) + "+" +
+                  std::to_string(length.value()) + " exceed the buffer's " +
+                  std::to_string(data.size()));
+    if (stride.value() > 252)
+      return fail(at + ": byteStride " + std::to_string(stride.value()) + " > 252");
+    return View{data.subspan(static_cast<std::size_t>(offset.value()),
+                             static_cast<std::size_t>(length.value())),
                 static_cast<std::size_t>(stride.value())};
   }
 
@@ -325,7 +338,7 @@ class GltfDecoder {
     std::size_t components = 0;
     bool normalized = false;
     std::size_t count = 0;
-    std::size_t stride = 0;  // bytes between elements
+    std::size_t stride = 0;            // bytes between elements
     std::span<const std::byte> bytes;  // from the first element to the end of the view
   };
 
@@ -344,7 +357,8 @@ class GltfDecoder {
     out.components = type_components(type_name->get_ref<const std::string&>());
     if (out.components == 0) return unsupported(at + ": type " + type_name->get<std::string>());
     const std::size_t element_bytes = component_bytes(out.component_type) * out.components;
-    if (element_bytes == 0) return unsupported(at + ": componentType " + std::to_string(type.value()));
+    if (element_bytes == 0)
+      return unsupported(at + ": componentType " + std::to_string(type.value()));
     auto normalized = a.find("normalized");
     out.normalized = normalized != a.end() && normalized->is_boolean() && normalized->get<bool>();
     Result<std::uint64_t> count = count_member(a, "count", at);
@@ -358,8 +372,8 @@ class GltfDecoder {
     if (!v.ok()) return v.status();
     out.stride = v->stride != 0 ? v->stride : element_bytes;
     if (out.stride < element_bytes)
-      return fail(at + ": byteStride " + std::to_string(out.stride) + " is smaller than an element (" +
-                  std::to_string(element_bytes) + " bytes)");
+      return fail(at + ": byteStride " + std::to_string(out.stride) +
+                  " is smaller than an element (" + std::to_string(element_bytes) + " bytes)");
     // Elements occupy offset + stride * (count - 1) + element_bytes bytes of the view.
     const std::uint64_t size = v->bytes.size();
     const bool fits = count.value() == 0 ||
@@ -367,7 +381,8 @@ class GltfDecoder {
                        (count.value() - 1) * out.stride + element_bytes <= size - offset.value());
     if (!fits)
       return fail(at + ": " + std::to_string(count.value()) + " elements at byte " +
-                  std::to_string(offset.value()) + " overrun its bufferView (" + std::to_string(size) + " bytes)");
+                  std::to_string(offset.value()) + " overrun its bufferView (" +
+                  std::to_string(size) + " bytes)");
     out.count = static_cast<std::size_t>(count.value());
     out.bytes = v->bytes.subspan(static_cast<std::size_t>(offset.value()));
     return out;
@@ -377,8 +392,10 @@ class GltfDecoder {
   static float component(const Accessor& a, std::size_t e, std::size_t c) {
     const std::size_t at = e * a.stride + c * component_bytes(a.component_type);
     switch (a.component_type) {
-      case kUnsignedByte: return static_cast<float>(std::to_integer<unsigned>(a.bytes[at])) / 255.0f;
-      case kUnsignedShort: return static_cast<float>(detail::load_le<std::uint16_t>(a.bytes, at)) / 65535.0f;
+      case kUnsignedByte:
+        return static_cast<float>(std::to_integer<unsigned>(a.bytes[at])) / 255.0f;
+      case kUnsignedShort:
+        return static_cast<float>(detail::load_le<std::uint16_t>(a.bytes, at)) / 65535.0f;
       default: return detail::load_le<float>(a.bytes, at);
     }
   }
@@ -396,11 +413,12 @@ class GltfDecoder {
         a->components == spec.components || (spec.allow_vec4 && a->components == 4);
     if (!(float_ok || int_ok) || !components_ok)
       return unsupported(at + ": accessor " + std::to_string(index) + " has componentType " +
-                         std::to_string(a->component_type) + " with " + std::to_string(a->components) +
-                         " components");
+                         std::to_string(a->component_type) + " with " +
+                         std::to_string(a->components) + " components");
     const std::size_t vertices = mesh.vertex_count();
     if (a->count != vertices)
-      return fail(at + ": " + std::to_string(a->count) + " values for " + std::to_string(vertices) + " vertices");
+      return fail(at + ": " + std::to_string(a->count) + " values for " + std::to_string(vertices) +
+                  " vertices");
     const std::uint32_t floats = mesh.layout.floats();
     for (std::size_t e = 0; e < vertices; ++e)
       for (std::size_t c = 0; c < spec.components; ++c)
@@ -414,7 +432,8 @@ class GltfDecoder {
     if (!a.ok()) return a.status();
     if (a->components != 1 || a->component_type == kFloat)
       return fail(at + ": accessor " + std::to_string(index) + " is not scalar unsigned integers");
-    if (a->count % 3 != 0) return fail(at + ": " + std::to_string(a->count) + " indices, not whole triangles");
+    if (a->count % 3 != 0)
+      return fail(at + ": " + std::to_string(a->count) + " indices, not whole triangles");
     const std::size_t vertices = mesh.vertex_count();
     mesh.indices.resize(a->count);
     for (std::size_t e = 0; e < a->count; ++e) {
@@ -426,8 +445,8 @@ class GltfDecoder {
         default: i = detail::load_le<std::uint32_t>(a->bytes, at_byte); break;
       }
       if (i >= vertices)
-        return fail(at + ": index " + std::to_string(e) + " is " + std::to_string(i) + ", but there are " +
-                    std::to_string(vertices) + " vertices");
+        return fail(at + ": index " + std::to_string(e) + " is " + std::to_string(i) +
+                    ", but there are " + std::to_string(vertices) + " vertices");
       mesh.indices[e] = i;
     }
     return {};
@@ -448,10 +467,13 @@ class GltfDecoder {
     Result<View> v = view(view_index.value(), at);
     if (!v.ok()) return v.status();
     auto attributes = extension.find("attributes");
-    if (attributes == extension.end() || !attributes->is_object()) return fail(at + ": 'attributes' missing");
+    if (attributes == extension.end() || !attributes->is_object())
+      return fail(at + ": 'attributes' missing");
     detail::DracoAttributeIds ids;
-    for (auto [semantic, id] : {std::pair{"POSITION", &ids.position}, {"NORMAL", &ids.normal},
-                                {"COLOR_0", &ids.color}, {"TEXCOORD_0", &ids.uv}}) {
+    for (auto [semantic, id] : {std::pair{"POSITION", &ids.position},
+                                {"NORMAL", &ids.normal},
+                                {"COLOR_0", &ids.color},
+                                {"TEXCOORD_0", &ids.uv}}) {
       if (!attributes->contains(semantic)) continue;
       Result<std::uint64_t> value = count_member(*attributes, semantic, at + " attributes");
       if (!value.ok()) return value.status();
@@ -466,13 +488,16 @@ class GltfDecoder {
     if (!primitive.is_object()) return fail(where + " is not an object");
     Result<std::uint64_t> mode = count_member(primitive, "mode", where, 4);
     if (!mode.ok()) return mode.status();
-    if (mode.value() != 4) return unsupported(where + ": mode " + std::to_string(mode.value()) + " (only triangles, 4)");
+    if (mode.value() != 4)
+      return unsupported(where + ": mode " + std::to_string(mode.value()) + " (only triangles, 4)");
     auto extensions = primitive.find("extensions");
-    if (extensions != primitive.end() && extensions->is_object() && extensions->contains(kDracoExtension))
+    if (extensions != primitive.end() && extensions->is_object() &&
+        extensions->contains(kDracoExtension))
       return read_draco_primitive((*extensions)[kDracoExtension], where);
 
     auto attributes = primitive.find("attributes");
-    if (attributes == primitive.end() || !attributes->is_object()) return fail(where + ": 'attributes' missing");
+    if (attributes == primitive.end() || !attributes->is_object())
+      return fail(where + ": 'attributes' missing");
     if (!attributes->contains("POSITION")) return fail(where + " has no POSITION");
     NodeMesh mesh;
     mesh.layout = VertexLayout{attributes->contains("NORMAL"), attributes->contains("COLOR_0"),
@@ -500,10 +525,13 @@ class GltfDecoder {
       OCTOLOD_RETURN_IF_ERROR(read_indices(indices.value(), mesh, where));
     } else {
       // Non-indexed triangles: vertices 3t, 3t+1, 3t+2.
-      if (mesh.vertex_count() % 3 != 0 || mesh.vertex_count() > std::numeric_limits<std::uint32_t>::max())
-        return fail(where + ": " + std::to_string(mesh.vertex_count()) + " unindexed vertices, not whole triangles");
+      if (mesh.vertex_count() % 3 != 0 ||
+          mesh.vertex_count() > std::numeric_limits<std::uint32_t>::max())
+        return fail(where + ": " + std::to_string(mesh.vertex_count()) +
+                    " unindexed vertices, not whole triangles");
       mesh.indices.resize(mesh.vertex_count());
-      for (std::size_t i = 0; i < mesh.indices.size(); ++i) mesh.indices[i] = static_cast<std::uint32_t>(i);
+      for (std::size_t i = 0; i < mesh.indices.size(); ++i)
+        mesh.indices[i] = static_cast<std::uint32_t>(i);
     }
     return mesh;
   }
@@ -515,7 +543,8 @@ class GltfDecoder {
       return fail(where + ": no primitives");
     std::vector<NodeMesh> parts;
     for (std::size_t p = 0; p < primitives->size(); ++p) {
-      Result<NodeMesh> part = read_primitive((*primitives)[p], where + " primitive " + std::to_string(p));
+      Result<NodeMesh> part =
+          read_primitive((*primitives)[p], where + " primitive " + std::to_string(p));
       if (!part.ok()) return part.status();
       parts.push_back(std::move(part).value());
     }
@@ -532,8 +561,10 @@ class GltfDecoder {
       const std::size_t base = out.vertex_count();
       if (base + restricted.vertex_count() > std::numeric_limits<std::uint32_t>::max())
         return fail(where + ": more than 2^32 vertices");
-      out.vertices.insert(out.vertices.end(), restricted.vertices.begin(), restricted.vertices.end());
-      for (std::uint32_t i : restricted.indices) out.indices.push_back(static_cast<std::uint32_t>(base + i));
+      out.vertices.insert(out.vertices.end(), restricted.vertices.begin(),
+                          restricted.vertices.end());
+      for (std::uint32_t i : restricted.indices)
+        out.indices.push_back(static_cast<std::uint32_t>(base + i));
     }
     return out;
   }

@@ -21,7 +21,8 @@ namespace octolod {
 namespace {
 
 constexpr const char* kDracoExtension = "KHR_draco_mesh_compression";
-constexpr std::size_t kMaxGltfCount = static_cast<std::size_t>(std::numeric_limits<std::int32_t>::max());
+constexpr std::size_t kMaxGltfCount =
+    static_cast<std::size_t>(std::numeric_limits<std::int32_t>::max());
 
 Status check_options(std::span<const NodeMesh> meshes, const GltfWriteOptions& options) {
   if (!options.names.empty() && options.names.size() != meshes.size())
@@ -29,8 +30,10 @@ Status check_options(std::span<const NodeMesh> meshes, const GltfWriteOptions& o
                        std::to_string(meshes.size()) + " meshes (give none or one per mesh)");
   if (!options.draco) return {};
   const DracoOptions& d = options.draco_options;
-  for (auto [bits, what] : {std::pair{d.position_bits, "position"}, {d.normal_bits, "normal"},
-                            {d.color_bits, "color"}, {d.uv_bits, "uv"}})
+  for (auto [bits, what] : {std::pair{d.position_bits, "position"},
+                            {d.normal_bits, "normal"},
+                            {d.color_bits, "color"},
+                            {d.uv_bits, "uv"}})
     if (bits < 0 || bits > 30)
       return usage_error(std::string("glTF export: Draco ") + what + " quantization bits " +
                          std::to_string(bits) + " out of range 0..30");
@@ -75,8 +78,7 @@ class ModelBuilder {
     }
   }
 
-  Status add(const NodeMesh& mesh, const std::string& name,
-             const detail::DracoPositionGrid& grid) {
+  Status add(const NodeMesh& mesh, const std::string& name, const detail::DracoPositionGrid& grid) {
     tinygltf::Node node;
     node.name = name;
     if (mesh.triangle_count() > 0) {
@@ -149,17 +151,17 @@ class ModelBuilder {
                                                                       bounds.max[2]};
     primitive.attributes["POSITION"] = position;
     if (layout.normal)
-      primitive.attributes["NORMAL"] = add_accessor(view, offset(VertexLayout::normal_offset()),
-                                                    TINYGLTF_COMPONENT_TYPE_FLOAT, count,
-                                                    TINYGLTF_TYPE_VEC3);
+      primitive.attributes["NORMAL"] =
+          add_accessor(view, offset(VertexLayout::normal_offset()), TINYGLTF_COMPONENT_TYPE_FLOAT,
+                       count, TINYGLTF_TYPE_VEC3);
     if (layout.color)
-      primitive.attributes["COLOR_0"] = add_accessor(view, offset(layout.color_offset()),
-                                                     TINYGLTF_COMPONENT_TYPE_FLOAT, count,
-                                                     TINYGLTF_TYPE_VEC3);
+      primitive.attributes["COLOR_0"] =
+          add_accessor(view, offset(layout.color_offset()), TINYGLTF_COMPONENT_TYPE_FLOAT, count,
+                       TINYGLTF_TYPE_VEC3);
     if (layout.uv)
-      primitive.attributes["TEXCOORD_0"] = add_accessor(view, offset(layout.uv_offset()),
-                                                        TINYGLTF_COMPONENT_TYPE_FLOAT, count,
-                                                        TINYGLTF_TYPE_VEC2);
+      primitive.attributes["TEXCOORD_0"] =
+          add_accessor(view, offset(layout.uv_offset()), TINYGLTF_COMPONENT_TYPE_FLOAT, count,
+                       TINYGLTF_TYPE_VEC2);
   }
 
   // uint16 when the largest index fits below 65535 (the reserved primitive-restart value).
@@ -172,21 +174,23 @@ class ModelBuilder {
     int index_view;
     if (short_indices(mesh)) {
       std::vector<std::uint16_t> narrow(mesh.indices.begin(), mesh.indices.end());
-      index_view = add_view(narrow.data(), narrow.size() * 2, 0, TINYGLTF_TARGET_ELEMENT_ARRAY_BUFFER);
+      index_view =
+          add_view(narrow.data(), narrow.size() * 2, 0, TINYGLTF_TARGET_ELEMENT_ARRAY_BUFFER);
     } else {
       index_view = add_view(mesh.indices.data(), mesh.indices.size() * 4, 0,
                             TINYGLTF_TARGET_ELEMENT_ARRAY_BUFFER);
     }
-    primitive.indices = add_accessor(
-        index_view, 0,
-        short_indices(mesh) ? TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT : TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT,
-        mesh.indices.size(), TINYGLTF_TYPE_SCALAR);
+    primitive.indices = add_accessor(index_view, 0,
+                                     short_indices(mesh) ? TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT
+                                                         : TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT,
+                                     mesh.indices.size(), TINYGLTF_TYPE_SCALAR);
   }
 
   // The accessors of a Draco primitive describe the decoded data, so the payload is decoded
   // once here: Edgebreaker may split or drop vertices, and quantization moves positions.
   Status add_draco_primitive(const NodeMesh& mesh, const std::string& name,
-                             const detail::DracoPositionGrid& grid, tinygltf::Primitive& primitive) {
+                             const detail::DracoPositionGrid& grid,
+                             tinygltf::Primitive& primitive) {
     Result<detail::DracoPayload> payload =
         detail::draco_encode(mesh, options_.draco_options, grid, name);
     if (!payload.ok()) return payload.status();
@@ -194,11 +198,11 @@ class ModelBuilder {
     if (!decoded.ok()) return decoded.status();
 
     add_vertex_accessors(decoded.value(), -1, primitive);
-    primitive.indices = add_accessor(-1, 0,
-                                     short_indices(decoded.value())
-                                         ? TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT
-                                         : TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT,
-                                     decoded->indices.size(), TINYGLTF_TYPE_SCALAR);
+    primitive.indices =
+        add_accessor(-1, 0,
+                     short_indices(decoded.value()) ? TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT
+                                                    : TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT,
+                     decoded->indices.size(), TINYGLTF_TYPE_SCALAR);
     const int view = add_view(payload->bytes.data(), payload->bytes.size(), 0, 0);
 
     tinygltf::Value::Object attributes;
@@ -261,7 +265,9 @@ Status write_gltf(const std::filesystem::path& path, std::span<const NodeMesh> m
   std::filesystem::path tmp = path;
   tmp += ".tmp-" + std::to_string(::getpid());
   std::FILE* f = std::fopen(tmp.c_str(), "wb");
-  if (!f) return io_error(path.string() + ": cannot create " + tmp.string() + ": " + std::strerror(errno));
+  if (!f)
+    return io_error(path.string() + ": cannot create " + tmp.string() + ": " +
+                    std::strerror(errno));
   const std::size_t written = std::fwrite(bytes->data(), 1, bytes->size(), f);
   int write_errno = errno;
   const bool flushed = std::fflush(f) == 0;
