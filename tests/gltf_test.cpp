@@ -669,6 +669,12 @@ TEST(Gltf, FileErrorsNameTheFile) {
   EXPECT_EQ(s.code(), ErrorCode::io);
   EXPECT_NE(s.message().find(missing_dir.string()), std::string::npos) << s.message();
 
+  NodeMesh bad = quad_mesh({});
+  bad.indices[0] = 9;
+  const Status invalid = write_gltf(dir.path() / "bad.glb", std::span(&bad, 1), {});
+  EXPECT_EQ(invalid.code(), ErrorCode::bad_input);
+  EXPECT_TRUE(std::filesystem::is_empty(dir.path())) << "neither the file nor a temporary";
+
   Result<std::vector<NodeMesh>> r = read_gltf(dir.path() / "absent.glb");
   ASSERT_FALSE(r.ok());
   EXPECT_EQ(r.status().code(), ErrorCode::io);

@@ -6,9 +6,9 @@
 
 #include <algorithm>
 #include <cerrno>
-#include <cstdio>
 #include <cstring>
 #include <exception>
+#include <fstream>
 #include <limits>
 #include <sstream>
 #include <string>
@@ -66,10 +66,12 @@ Status check_mesh(const NodeMesh& mesh, const std::string& name) {
 // Builds the tinygltf model; appends all binary data to model.buffers[0].
 class ModelBuilder {
  public:
-  explicit ModelBuilder(const GltfWriteOptions& options) : options_(options) {
+  // `reserve_bytes`: expected binary data, to grow the buffer once.
+  ModelBuilder(const GltfWriteOptions& options, std::size_t reserve_bytes) : options_(options) {
     model_.asset.version = "2.0";
     model_.asset.generator = "octolod";
     model_.buffers.emplace_back();
+    model_.buffers[0].data.reserve(reserve_bytes);
     model_.scenes.emplace_back();
     model_.defaultScene = 0;
     if (options.draco) {
@@ -224,26 +226,31 @@ class ModelBuilder {
 
 }  // namespace
 
-Result<std::vector<std::byte>> encode_gltf(std::span<const NodeMesh> meshes,
-                                           const GltfWriteOptions& options) {
+namespace {
+
+// Validates, builds the model and serializes it into `stream` (nothing is written on a
+// validation error).
+Status serialize(std::span<const NodeMesh> meshes, const GltfWriteOptions& options,
+                 std::ostream& stream) {
   OCTOLOD_RETURN_IF_ERROR(check_options(meshes, options));
   std::vector<std::string> names = options.names;
   for (std::size_t i = names.size(); i < meshes.size(); ++i)
     names.push_back("mesh_" + std::to_string(i));
 
   Bounds all;
+  std::size_t plain_bytes = 0;
   for (std::size_t i = 0; i < meshes.size(); ++i) {
     OCTOLOD_RETURN_IF_ERROR(check_mesh(meshes[i], names[i]));
     if (meshes[i].triangle_count() > 0) all.extend(meshes[i].bounds());
+    plain_bytes += (meshes[i].vertices.size() + meshes[i].indices.size()) * 4 + 8;
   }
   const detail::DracoPositionGrid grid = detail::DracoPositionGrid::enclosing(all);
 
-  ModelBuilder builder(options);
+  ModelBuilder builder(options, options.draco ? 0 : plain_bytes);
   for (std::size_t i = 0; i < meshes.size(); ++i)
     OCTOLOD_RETURN_IF_ERROR(builder.add(meshes[i], names[i], grid));
   const tinygltf::Model model = std::move(builder).finish();
 
-  std::ostringstream stream;
   try {
     tinygltf::TinyGLTF writer;
     if (!writer.WriteGltfSceneToStream(&model, stream, !options.binary, options.binary))
@@ -252,39 +259,41 @@ Result<std::vector<std::byte>> encode_gltf(std::span<const NodeMesh> meshes,
     // nlohmann::json (inside tinygltf) throws on names that are not valid UTF-8.
     return bad_input_error(std::string("glTF export: cannot serialize: ") + e.what());
   }
+  return {};
+}
+
+}  // namespace
+
+Result<std::vector<std::byte>> encode_gltf(std::span<const NodeMesh> meshes,
+                                           const GltfWriteOptions& options) {
+  std::ostringstream stream;
+  OCTOLOD_RETURN_IF_ERROR(serialize(meshes, options, stream));
   const std::string text = std::move(stream).str();
   const auto* p = reinterpret_cast<const std::byte*>(text.data());
   return std::vector<std::byte>(p, p + text.size());
 }
 
+// Streams straight into the file: peak memory is the model's buffer plus tinygltf's copy of it.
 Status write_gltf(const std::filesystem::path& path, std::span<const NodeMesh> meshes,
                   const GltfWriteOptions& options) {
-  Result<std::vector<std::byte>> bytes = encode_gltf(meshes, options);
-  if (!bytes.ok()) return bytes.status();
-
   std::filesystem::path tmp = path;
   tmp += ".tmp-" + std::to_string(::getpid());
-  std::FILE* f = std::fopen(tmp.c_str(), "wb");
-  if (!f)
+  std::ofstream file(tmp, std::ios::binary | std::ios::trunc);
+  if (!file)
     return io_error(path.string() + ": cannot create " + tmp.string() + ": " +
                     std::strerror(errno));
-  const std::size_t written = std::fwrite(bytes->data(), 1, bytes->size(), f);
-  int write_errno = errno;
-  const bool flushed = std::fflush(f) == 0;
-  if (!flushed) write_errno = errno;
-  const bool closed = std::fclose(f) == 0;
+  Status status = serialize(meshes, options, file);
+  file.close();
+  if (status.ok() && file.fail())
+    status = io_error(path.string() + ": write failed: " + std::strerror(errno));
   std::error_code ec;
-  if (written != bytes->size() || !flushed || !closed) {
-    std::filesystem::remove(tmp, ec);
-    return io_error(path.string() + ": write failed: " + std::strerror(write_errno));
-  }
-  std::filesystem::rename(tmp, path, ec);
-  if (ec) {
+  if (status.ok()) std::filesystem::rename(tmp, path, ec);
+  if (ec) status = io_error(path.string() + ": rename failed: " + ec.message());
+  if (!status.ok()) {
     std::error_code ignored;
     std::filesystem::remove(tmp, ignored);
-    return io_error(path.string() + ": rename failed: " + ec.message());
   }
-  return {};
+  return status;
 }
 
 }  // namespace octolod

@@ -61,8 +61,8 @@ struct GltfWriteOptions {
 Result<std::vector<std::byte>> encode_gltf(std::span<const NodeMesh> meshes,
                                            const GltfWriteOptions& options);
 
-// encode_gltf, then writes the bytes atomically: a temporary sibling (path + ".tmp-<pid>") renamed
-// over `path` once complete. io errors name the file.
+// Same as encode_gltf, streamed into a temporary sibling (path + ".tmp-<pid>") that is renamed
+// over `path` once complete; on any error no file is left. io errors name the file.
 Status write_gltf(const std::filesystem::path& path, std::span<const NodeMesh> meshes,
                   const GltfWriteOptions& options);
 
