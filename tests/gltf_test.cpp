@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 #include <sys/wait.h>
+#include <tiny_gltf.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -271,6 +272,46 @@ TEST(Gltf, GlbHasMagicVersionTwoAndConsistentChunkLengths) {
     for (const json& view : document["bufferViews"])
       EXPECT_LE(view.value("byteOffset", std::size_t{0}) + view["byteLength"].get<std::size_t>(),
                 bin_length);
+  }
+}
+
+// An independent loader (the system tinygltf, which octolod only uses for writing) reads what
+// octolod writes, GLB and .gltf alike, with the structure the header promises.
+TEST(Gltf, TinygltfLoadsTheWrittenFiles) {
+  const std::vector<NodeMesh> meshes = {grid_mesh(6), quad_mesh({false, false, true})};
+  for (bool binary : {true, false}) {
+    GltfWriteOptions options = named({"a", "b"});
+    options.binary = binary;
+    const std::vector<std::byte> bytes = encode(meshes, options);
+    tinygltf::TinyGLTF loader;
+    tinygltf::Model model;
+    std::string error, warning;
+    const auto* data = reinterpret_cast<const unsigned char*>(bytes.data());
+    const bool loaded = binary ? loader.LoadBinaryFromMemory(&model, &error, &warning, data,
+                                                             static_cast<unsigned>(bytes.size()))
+                               : loader.LoadASCIIFromString(
+                                     &model, &error, &warning, reinterpret_cast<const char*>(data),
+                                     static_cast<unsigned>(bytes.size()), "");
+    ASSERT_TRUE(loaded) << error;
+    EXPECT_TRUE(warning.empty()) << warning;
+    ASSERT_EQ(model.meshes.size(), 2u);
+    EXPECT_EQ(model.nodes[1].name, "b");
+    const tinygltf::Primitive& primitive = model.meshes[0].primitives[0];
+    EXPECT_EQ(primitive.attributes.size(), 4u);
+    const tinygltf::Accessor& indices =
+        model.accessors[static_cast<std::size_t>(primitive.indices)];
+    EXPECT_EQ(indices.count, meshes[0].indices.size());
+    const tinygltf::BufferView& view =
+        model.bufferViews[static_cast<std::size_t>(indices.bufferView)];
+    const unsigned char* first =
+        model.buffers[0].data.data() + view.byteOffset + indices.byteOffset;
+    std::uint16_t index;
+    std::memcpy(&index, first + 2 * 5, 2);  // the sixth index
+    EXPECT_EQ(index, meshes[0].indices[5]);
+    const tinygltf::Accessor& uv = model.accessors[static_cast<std::size_t>(
+        model.meshes[1].primitives[0].attributes.at("TEXCOORD_0"))];
+    EXPECT_EQ(uv.type, TINYGLTF_TYPE_VEC2);
+    EXPECT_EQ(model.bufferViews[static_cast<std::size_t>(uv.bufferView)].byteStride, 20u);
   }
 }
 
