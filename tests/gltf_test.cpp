@@ -873,6 +873,13 @@ TEST(GltfExport, ReportsUsageAndMissingTreeErrors) {
   EXPECT_EQ(run_cli("export " + dir.path().string() + " -o " + out).first, 1);  // no cut given
   EXPECT_EQ(run_cli("export " + dir.path().string() + " --error 1 --level 2 -o " + out).first, 1);
   EXPECT_EQ(run_cli("export " + dir.path().string() + " --error -1 -o " + out).first, 1);
+  EXPECT_EQ(
+      run_cli("export " + dir.path().string() + " --error 1 --position-bits 9 -o " + out).first,
+      1);  // quantization without --draco
+  EXPECT_EQ(
+      run_cli("export " + dir.path().string() + " --error 1 --draco --position-bits 40 -o " + out)
+          .first,
+      1);
   EXPECT_FALSE(std::filesystem::exists(out));
   std::filesystem::remove(dir.path() / "1" / "lod0.olod");
   EXPECT_EQ(run_cli("export " + dir.path().string() + " --level 1 -o " + out).first, 4);

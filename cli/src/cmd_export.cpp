@@ -99,12 +99,14 @@ void add_export_command(CLI::App& app, CommandContext& context) {
   error->excludes(level);
   command->add_option("-o,--output", args->output, "Output file: .glb, or .gltf for embedded JSON")
       ->required();
-  command->add_flag("--draco", args->draco,
-                    "Compress with Draco (KHR_draco_mesh_compression; lossy, see --position-bits)");
+  CLI::Option* draco = command->add_flag(
+      "--draco", args->draco,
+      "Compress with Draco (KHR_draco_mesh_compression; lossy, see --position-bits)");
   command
       ->add_option("--position-bits", args->draco_options.position_bits,
                    "Draco position quantization bits (1..30) over the cut's bounding cube")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->needs(draco);
   command->callback([args, error, level, &context] {
     if (error->count() + level->count() != 1) {
       context.exit_code = report(usage_error("export: give exactly one of --error E or --level K"));
