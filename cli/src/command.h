@@ -28,6 +28,8 @@ Result<std::uint64_t> parse_byte_size(const std::string& text);
 void add_sample_command(CLI::App& app, CommandContext& context);
 void add_walk_command(CLI::App& app, CommandContext& context);
 void add_export_command(CLI::App& app, CommandContext& context);
+void add_bake_command(CLI::App& app, CommandContext& context);
+void add_info_command(CLI::App& app, CommandContext& context);
 
 
 

@@ -51,6 +51,8 @@ int main(int argc, char** argv) {
   add_sample_command(app, context);
   add_walk_command(app, context);
   add_export_command(app, context);
+  add_bake_command(app, context);
+  add_info_command(app, context);
 
 
 

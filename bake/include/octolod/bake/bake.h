@@ -1,0 +1,86 @@
+// The bake: a PLY mesh of any size becomes an on-disk LOD octree directory (ARCHITECTURE.md
+// stages 1-6; seed 3.3-3.5, 4.2-4.4):
+//
+//   soup      the PLY becomes one self-contained record per triangle (octolod/bake/soup.h)
+//   octree    the soup is sorted by the Morton code of each triangle's centroid in the model's
+//             bounding cube (external merge sort), and one streaming pass over the sorted
+//             records decides the tree (a node splits while it holds more than max_tris
+//             triangles and is shallower than max_depth) and hands every leaf its contiguous
+//             run of triangles; each leaf is indexed (exact vertex dedup) and written as its
+//             finest LOD, lod0.olod, on worker threads
+//   manifest  manifest.json at the root (octolod/formats/manifest.h)
+//
+// Output: OUT_DIR/manifest.json and one directory per node, children in sub-directories "0".."7"
+// by octant (docs/formats.md). The tree is built in a temporary sibling directory of OUT_DIR and
+// renamed into place only when complete: a failed or interrupted bake leaves no OUT_DIR (or the
+// previous one, untouched) and no temporary file.
+//
+// The output depends only on the input and (max_tris, max_depth): not on the budget, the thread
+// count or the work directory (the manifest's parameters, stage_seconds and stats aside).
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <string_view>
+
+#include "octolod/formats/manifest.h"
+#include "octolod/formats/status.h"
+
+namespace octolod::bake {
+
+// Called from the bake's calling thread: stage is "split", "dereference 0..2" (the soup), "sort"
+// (the octree's run formation), "octree" (the streaming pass); `done` of `total` items.
+using BakeProgressFn =
+    std::function<void(std::string_view stage, std::uint64_t done, std::uint64_t total)>;
+
+struct BakeOptions {
+  std::filesystem::path input;   // PLY file
+  std::filesystem::path output;  // OUT_DIR: must not exist, or be empty, or hold an earlier bake
+  // A node splits while it holds more than this many triangles (seed 3.4). Smaller leaves mean
+  // more nodes, more files and a finer LOD cut; larger ones fewer files but coarser paging.
+  // Memory: about (max_tris + 1) soup records per leaf in flight. At least 1.
+  std::uint32_t max_tris = 2000;
+  // Deepest level (root = 0), at most 21. A leaf at max_depth keeps all its triangles, however
+  // many: raise it for dense models so no leaf outgrows the budget.
+  std::uint32_t max_depth = 10;
+  // Cap on the bake's buffers together (soup stage, octree sort, leaf buffers); the peak RSS is
+  // this plus the program's fixed footprint. Larger budgets mean fewer sorted runs and merges
+  // and, once the vertices fit in half of it, the in-core soup path. At least kMinBakeBudget.
+  std::uint64_t memory_budget_bytes = std::uint64_t{64} << 20;
+  // Where the temporary files go (inside a fresh ".octolod-tmp-*" directory); empty: next to
+  // the output. Needs room for about two soups (3 x vertex bytes + 4 per triangle, twice).
+  std::filesystem::path work_dir;
+  // Threads for the sorts and the leaf writers; 0 = hardware concurrency. The output does not
+  // depend on it.
+  unsigned threads = 0;
+  // Take the soup stage's out-of-core path even when the vertices would fit (tests, benchmarks).
+  bool force_out_of_core = false;
+  // Install the SIGINT/SIGTERM cleanup (temp_dir.h): on a signal the temporary directories are
+  // removed and the process dies by that signal. For programs; libraries embedding the bake
+  // may prefer their own handling.
+  bool cleanup_on_signal = false;
+  BakeProgressFn progress;
+};
+
+inline constexpr std::uint64_t kMinBakeBudget = std::uint64_t{1} << 20;
+
+struct BakeReport {
+  Manifest manifest;             // as written to OUT_DIR/manifest.json
+  std::uint64_t nodes = 0;
+  std::uint64_t leaves = 0;
+  std::uint32_t depth = 0;       // deepest leaf
+  std::uint64_t bytes = 0;       // node files + manifest
+  bool soup_in_core = false;     // which soup path ran
+  std::uint64_t sort_runs = 0;   // sorted runs the octree sort wrote (0: in core)
+  std::uint64_t peak_rss_bytes = 0;
+};
+
+// Bakes options.input into options.output (see the top of this file). Errors: usage for bad
+// options (max_tris 0, max_depth > 21, budget below kMinBakeBudget or too small for max_tris,
+// an output that is a file or a non-empty foreign directory), the PLY reader's bad_input /
+// unsupported / io naming the file, io for any refused write (out of space included) naming
+// the path. On error nothing is published and every temporary file is gone.
+Result<BakeReport> bake(const BakeOptions& options);
+
+}  // namespace octolod::bake

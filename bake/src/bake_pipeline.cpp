@@ -1,0 +1,482 @@
+// The bake pipeline (ARCHITECTURE.md stages 2, 3 and 6; seed 3.4, 4.3): soup, Morton sort and
+// streaming octree with leaf writing on worker threads, manifest, atomic publication. See
+// octolod/bake/bake.h for the contract.
+#include "octolod/bake/bake.h"
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cstring>
+#include <condition_variable>
+#include <deque>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <system_error>
+#include <thread>
+#include <utility>
+#include <vector>
+
+#include "morton.h"
+#include "node_index.h"
+#include "octolod/bake/external_sort.h"
+#include "octolod/bake/soup.h"
+#include "octolod/formats/node_file.h"
+#include "octree_build.h"
+#include "peak_rss.h"
+#include "record_file.h"
+#include "temp_dir.h"
+
+namespace octolod::bake {
+namespace {
+
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+
+double seconds_since(Clock::time_point start) {
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+Status interrupted() { return io_error("bake interrupted by a signal"); }
+
+// File name of a node's LOD `lod` inside its directory.
+std::string lod_file_name(std::size_t lod) { return "lod" + std::to_string(lod) + ".olod"; }
+
+// Sort key of soup records: the Morton code of the triangle's centroid (morton.h).
+SortKeyFn centroid_morton_key(const MortonQuantizer& quantizer, VertexLayout layout) {
+  const std::size_t record_bytes = soup_record_bytes(layout);
+  return [quantizer, layout, record_bytes](std::span<const std::byte> records,
+                                           std::span<std::uint64_t> keys) {
+    for (std::size_t i = 0; i < keys.size(); ++i) {
+      const std::byte* record = records.data() + i * record_bytes;
+      float corner[3][3];
+      for (int c = 0; c < 3; ++c)
+        std::memcpy(corner[c], record + soup_corner_offset(layout, c), sizeof corner[c]);
+      double centroid[3];
+      for (int a = 0; a < 3; ++a)
+        centroid[a] = (static_cast<double>(corner[0][a]) + corner[1][a] + corner[2][a]) / 3.0;
+      keys[i] = quantizer.key(centroid);
+    }
+  };
+}
+
+// What a leaf's processing produced.
+struct LeafOutput {
+  Bounds bounds;              // tight bounds of its triangles (model units)
+  std::vector<LodInfo> lods;  // finest first
+};
+
+// The per-node LOD step of a leaf (seed 3.5.3: leaves are simplified from the original
+// triangles): its finest LOD is the original triangles, indexed, error 0.
+Result<LeafOutput> build_leaf_lods(const fs::path& root, const std::string& dir,
+                                   const NodeMesh& original) {
+  LeafOutput out;
+  out.bounds = original.bounds();
+  const std::string file = (dir.empty() ? "" : dir + "/") + lod_file_name(0);
+  OCTOLOD_RETURN_IF_ERROR(write_node_file(root / file, original));
+  LodInfo lod;
+  lod.triangles = static_cast<std::uint32_t>(original.triangle_count());
+  lod.vertices = static_cast<std::uint32_t>(original.vertex_count());
+  lod.error = 0.0;
+  lod.bytes = node_file_size(original);
+  lod.file = file;
+  out.lods.push_back(std::move(lod));
+  return out;
+}
+
+// Writes the leaves the octree pass hands out: on the calling thread (threads <= 1) or on
+// worker threads fed through a queue capped at `queue_bytes` of records (one leaf always fits,
+// whatever its size). Each leaf's files depend only on its records, so the output is the same
+// for any number of workers.
+class LeafWriter {
+ public:
+  LeafWriter(fs::path root, VertexLayout layout, unsigned workers, std::size_t queue_bytes)
+      : root_(std::move(root)), layout_(layout), queue_bytes_(queue_bytes) {
+    for (unsigned i = 0; i < workers; ++i) threads_.emplace_back([this] { work(); });
+  }
+  ~LeafWriter() { stop(); }
+  LeafWriter(const LeafWriter&) = delete;
+  LeafWriter& operator=(const LeafWriter&) = delete;
+
+  Status submit(std::int32_t node, std::string dir, std::vector<std::byte>&& records) {
+    if (cleanup_signal_received()) return interrupted();
+    Task task{node, std::move(dir), std::move(records)};
+    if (threads_.empty()) return run(task, indexer_, mesh_);
+    std::unique_lock lock(mutex_);
+    space_.wait(lock, [&] {
+      return !error_.ok() || queued_bytes_ == 0 ||
+             queued_bytes_ + task.records.size() <= queue_bytes_;
+    });
+    if (!error_.ok()) return error_;
+    queued_bytes_ += task.records.size();
+    queue_.push_back(std::move(task));
+    work_.notify_one();
+    return {};
+  }
+
+  // Waits for every submitted leaf; the first error any of them met.
+  Status finish() {
+    stop();
+    std::lock_guard lock(mutex_);
+    return error_;
+  }
+
+  std::vector<std::pair<std::int32_t, LeafOutput>>& results() { return results_; }
+
+ private:
+  struct Task {
+    std::int32_t node;
+    std::string dir;
+    std::vector<std::byte> records;
+  };
+
+  Status run(const Task& task, NodeIndexer& indexer, NodeMesh& mesh) {
+    if (cleanup_signal_received()) return interrupted();
+    if (!task.dir.empty()) {
+      std::error_code ec;
+      fs::create_directories(root_ / task.dir, ec);
+      if (ec) {
+        return io_error("cannot create node directory '" + (root_ / task.dir).string() +
+                        "': " + ec.message());
+      }
+    }
+    indexer.index(task.records, layout_, mesh);
+    Result<LeafOutput> out = build_leaf_lods(root_, task.dir, mesh);
+    if (!out.ok()) return out.status();
+    std::lock_guard lock(results_mutex_);
+    results_.emplace_back(task.node, std::move(out).value());
+    return {};
+  }
+
+  void work() {
+    NodeIndexer indexer;
+    NodeMesh mesh;
+    for (;;) {
+      Task task;
+      {
+        std::unique_lock lock(mutex_);
+        work_.wait(lock, [&] { return done_ || !queue_.empty(); });
+        if (queue_.empty()) return;
+        task = std::move(queue_.front());
+        queue_.pop_front();
+      }
+      Status status = error_seen_ ? Status{} : run(task, indexer, mesh);
+      std::lock_guard lock(mutex_);
+      queued_bytes_ -= task.records.size();
+      if (!status.ok() && error_.ok()) {
+        error_ = std::move(status);
+        error_seen_ = true;
+      }
+      space_.notify_all();
+    }
+  }
+
+  void stop() {
+    {
+      std::lock_guard lock(mutex_);
+      done_ = true;
+    }
+    work_.notify_all();
+    for (std::thread& t : threads_) t.join();
+    threads_.clear();
+  }
+
+  const fs::path root_;
+  const VertexLayout layout_;
+  const std::size_t queue_bytes_;
+  NodeIndexer indexer_;  // for threads <= 1
+  NodeMesh mesh_;
+  std::vector<std::thread> threads_;
+  std::mutex mutex_;
+  std::condition_variable work_;
+  std::condition_variable space_;
+  std::deque<Task> queue_;
+  std::size_t queued_bytes_ = 0;
+  bool done_ = false;
+  std::atomic<bool> error_seen_{false};
+  Status error_;
+  std::mutex results_mutex_;
+  std::vector<std::pair<std::int32_t, LeafOutput>> results_;
+};
+
+// How the budget is divided in the octree stage: the sort gets what the leaf buffers leave.
+struct OctreeBudget {
+  std::size_t io_bytes = 0;     // the soup file reader's buffer
+  std::size_t queue_bytes = 0;  // leaves waiting for a worker
+  std::uint64_t sort_bytes = 0;
+};
+
+Result<OctreeBudget> divide_octree_budget(const BakeOptions& options, VertexLayout layout,
+                                          unsigned workers) {
+  // One leaf's records; a worker also holds its mesh and the encoded node file (together about
+  // the records' size: shared vertices are stored once), the octree pass a candidate and a
+  // replay of one.
+  const std::uint64_t leaf =
+      (std::uint64_t{options.max_tris} + 1) * soup_record_bytes(layout);
+  OctreeBudget b;
+  b.io_bytes = static_cast<std::size_t>(
+      std::clamp<std::uint64_t>(options.memory_budget_bytes / 16, 4096, std::uint64_t{1} << 20));
+  b.queue_bytes = static_cast<std::size_t>(2 * leaf);
+  const std::uint64_t reserve =
+      b.io_bytes + (workers ? b.queue_bytes : 0) + (workers ? workers : 1) * 2 * leaf + 2 * leaf;
+  if (reserve > options.memory_budget_bytes / 2) {
+    return usage_error("memory budget of " + std::to_string(options.memory_budget_bytes >> 20) +
+                       " MiB is too small for --max-tris " + std::to_string(options.max_tris) +
+                       " with layout " + layout.describe() + ": needs at least " +
+                       std::to_string((2 * reserve >> 20) + 1) + " MiB");
+  }
+  b.sort_bytes = options.memory_budget_bytes - reserve;
+  return b;
+}
+
+struct OctreeResult {
+  RootCube cube;
+  std::vector<OctreeNode> nodes;
+  std::vector<std::optional<LeafOutput>> leaves;  // by node index
+  SortStats sort;
+  double sort_seconds = 0;    // run formation (reading the soup into the sorter)
+  double stream_seconds = 0;  // merge + tree decision + leaf writing
+};
+
+// Sorts the soup by centroid Morton code and streams it through the OctreeBuilder, leaves
+// written into `root` (seed 3.4, 4.3). Removes the soup file once the sorter holds it all.
+Result<OctreeResult> build_octree(const BakeOptions& options, SoupResult& soup,
+                                  const fs::path& work, const fs::path& root, unsigned threads) {
+  OctreeResult result;
+  result.cube = RootCube::around(soup.bounds);
+  const MortonQuantizer quantizer(result.cube, options.max_depth);
+  const std::size_t record_bytes = soup_record_bytes(soup.layout);
+  const unsigned workers = threads > 1 ? threads - 1 : 0;
+  auto budget = divide_octree_budget(options, soup.layout, workers);
+  if (!budget.ok()) return budget.status();
+  auto progress = [&](std::string_view stage, std::uint64_t done) {
+    if (options.progress) options.progress(stage, done, soup.triangle_count);
+  };
+
+  // sort: the soup file into the sorter's run buffer
+  auto start = Clock::now();
+  SortOptions sort_options;
+  sort_options.memory_budget_bytes = budget->sort_bytes;
+  sort_options.work_dir = work;
+  sort_options.threads = threads;
+  const SortKeyFn key = centroid_morton_key(quantizer, soup.layout);
+  auto created = RecordSorter::create(record_bytes, key, sort_options);
+  if (!created.ok()) return created.status();
+  RecordSorter& sorter = *created.value();
+  {
+    auto reader = RecordReader::open(soup.soup.path(), record_bytes, budget->io_bytes);
+    if (!reader.ok()) return reader.status();
+    std::uint64_t done = 0;
+    for (;;) {
+      if (cleanup_signal_received()) return interrupted();
+      auto block = reader->read();
+      if (!block.ok()) return block.status();
+      if (block->empty()) break;
+      OCTOLOD_RETURN_IF_ERROR(sorter.push(block.value()));
+      done += block->size() / record_bytes;
+      progress("sort", done);
+    }
+  }
+  soup.soup.remove();  // every record is in the sorter's runs now: free the disk
+  OCTOLOD_RETURN_IF_ERROR(sorter.finish());
+  result.sort_seconds = seconds_since(start);
+
+  // octree: one pass over the sorted stream decides the tree and hands out the leaves
+  start = Clock::now();
+  LeafWriter writer(root, soup.layout, workers, budget->queue_bytes);
+  OctreeBuilder* builder_ptr = nullptr;
+  OctreeBuilder builder(options.max_tris, options.max_depth, record_bytes,
+                        [&](std::int32_t node, std::vector<std::byte>&& records) {
+                          const std::string dir =
+                              builder_ptr->nodes()[static_cast<std::size_t>(node)].path();
+                          return writer.submit(node, dir, std::move(records));
+                        });
+  builder_ptr = &builder;
+  std::vector<std::uint64_t> keys;
+  std::uint64_t done = 0;
+  Status streamed;
+  for (;;) {
+    if (cleanup_signal_received()) {
+      streamed = interrupted();
+      break;
+    }
+    auto block = sorter.next();
+    if (!block.ok()) {
+      streamed = block.status();
+      break;
+    }
+    if (block->empty()) break;
+    keys.resize(block->size() / record_bytes);
+    key(block.value(), keys);
+    streamed = builder.push(block.value(), keys);
+    if (!streamed.ok()) break;
+    done += keys.size();
+    progress("octree", done);
+  }
+  if (streamed.ok()) streamed = builder.finish();
+  const Status written = writer.finish();
+  OCTOLOD_RETURN_IF_ERROR(streamed);
+  OCTOLOD_RETURN_IF_ERROR(written);
+  result.sort = sorter.stats();
+  result.nodes = std::move(builder.nodes());
+  result.leaves.resize(result.nodes.size());
+  for (auto& [node, out] : writer.results())
+    result.leaves[static_cast<std::size_t>(node)] = std::move(out);
+  result.stream_seconds = seconds_since(start);
+  return result;
+}
+
+Manifest assemble_manifest(const BakeOptions& options, unsigned threads, const SoupResult& soup,
+                           OctreeResult& octree) {
+  Manifest m;
+  m.layout = soup.layout;
+  m.input_vertices = soup.vertex_count;
+  m.input_triangles = soup.triangle_count;
+  m.parameters.input = options.input.string();
+  m.parameters.max_tris = options.max_tris;
+  m.parameters.max_depth = options.max_depth;
+  m.parameters.memory_budget_bytes = options.memory_budget_bytes;
+  m.parameters.threads = threads;
+  if (octree.nodes.empty()) {  // no triangles: a root leaf without LODs
+    NodeInfo root;
+    root.cell = octree.cube.cell(0, 0);
+    m.nodes.push_back(root);
+    m.bounds = soup.bounds;
+    return m;
+  }
+  m.nodes.resize(octree.nodes.size());
+  for (std::size_t i = 0; i < octree.nodes.size(); ++i) {
+    const OctreeNode& o = octree.nodes[i];
+    NodeInfo& n = m.nodes[i];
+    n.path = o.path();
+    n.depth = o.depth;
+    n.parent = o.parent;
+    n.children = o.children;
+    n.cell = octree.cube.cell(o.prefix, o.depth);
+    n.source_triangles = o.triangles;
+    if (octree.leaves[i]) {
+      n.bounds = octree.leaves[i]->bounds;
+      n.lods = std::move(octree.leaves[i]->lods);
+    }
+  }
+  // Children follow their parents: one backward sweep unites the bounds.
+  for (std::size_t i = m.nodes.size(); i-- > 1;)
+    m.nodes[static_cast<std::size_t>(m.nodes[i].parent)].bounds.extend(m.nodes[i].bounds);
+  m.bounds = m.nodes[0].bounds;
+  return m;
+}
+
+Status check_options(const BakeOptions& options) {
+  if (options.max_tris < 1) return usage_error("max_tris must be at least 1");
+  if (options.max_depth > kMaxOctreeDepth) {
+    return usage_error("max_depth " + std::to_string(options.max_depth) + " is above the limit of " +
+                       std::to_string(kMaxOctreeDepth));
+  }
+  if (options.memory_budget_bytes < kMinBakeBudget) {
+    return usage_error("memory budget of " + std::to_string(options.memory_budget_bytes) +
+                       " bytes is below the minimum of " + std::to_string(kMinBakeBudget));
+  }
+  if (options.output.empty()) return usage_error("no output directory given");
+  return check_replaceable(options.output);
+}
+
+Result<BakeReport> run_bake(const BakeOptions& options) {
+  const auto start = Clock::now();
+  OCTOLOD_RETURN_IF_ERROR(check_options(options));
+  const unsigned threads =
+      options.threads ? options.threads : std::max(1u, std::thread::hardware_concurrency());
+  if (options.cleanup_on_signal) install_signal_cleanup();
+
+  // temporary directories: the staging tree next to the output, the work files
+  fs::path output = fs::absolute(options.output).lexically_normal();
+  if (!output.has_filename()) output = output.parent_path();  // "out/" names "out"
+  const fs::path parent = output.parent_path();
+  std::error_code ec;
+  if (!fs::is_directory(parent, ec)) {
+    return io_error("cannot write '" + options.output.string() + "': directory '" +
+                    parent.string() + "' does not exist");
+  }
+  const fs::path work_parent = options.work_dir.empty() ? parent : options.work_dir;
+  if (!fs::is_directory(work_parent, ec))
+    return io_error("work directory '" + work_parent.string() + "' does not exist");
+  remove_stale_temp_dirs(parent);
+  if (work_parent != parent) remove_stale_temp_dirs(work_parent);
+  auto staging = TempDir::create(parent, "out");
+  if (!staging.ok()) return staging.status();
+  auto work = TempDir::create(work_parent, "work");
+  if (!work.ok()) return work.status();
+
+  Manifest manifest;
+  BakeReport report;
+  {
+    // soup
+    SoupOptions soup_options;
+    soup_options.memory_budget_bytes = options.memory_budget_bytes;
+    soup_options.work_dir = work->path();
+    soup_options.threads = threads;
+    soup_options.order = SoupOrder::by_last_corner;
+    soup_options.force_out_of_core = options.force_out_of_core;
+    soup_options.progress = options.progress;
+    auto soup = build_soup(options.input, soup_options);
+    if (!soup.ok()) return soup.status();
+    if (cleanup_signal_received()) return interrupted();
+    if (soup->triangle_count >= (std::uint64_t{1} << 32))
+      return unsupported_error(options.input.string() + ": 2^32 triangles or more");
+
+    // octree
+    auto octree = build_octree(options, soup.value(), work->path(), staging->path(), threads);
+    if (!octree.ok()) return octree.status();
+
+    // manifest
+    manifest = assemble_manifest(options, threads, soup.value(), octree.value());
+    manifest.stage_seconds["soup"] = soup->seconds.total;
+    manifest.stage_seconds["soup.split"] = soup->seconds.split;
+    manifest.stage_seconds["soup.sort"] = soup->seconds.sort;
+    manifest.stage_seconds["soup.dereference"] = soup->seconds.dereference;
+    manifest.stage_seconds["octree.sort"] = octree->sort_seconds;
+    manifest.stage_seconds["octree.stream"] = octree->stream_seconds;
+    manifest.stage_seconds["octree"] = octree->sort_seconds + octree->stream_seconds;
+    report.soup_in_core = soup->in_core;
+    report.sort_runs = octree->sort.runs;
+    manifest.stats["soup_in_core"] = soup->in_core ? 1 : 0;
+    manifest.stats["octree_sort_runs"] = static_cast<double>(octree->sort.runs);
+    manifest.stats["octree_sort_merge_passes"] = octree->sort.merge_passes;
+  }
+  work->remove();
+
+  for (const NodeInfo& n : manifest.nodes) {
+    ++report.nodes;
+    if (n.is_leaf()) {
+      ++report.leaves;
+      report.depth = std::max(report.depth, n.depth);
+    }
+    for (const LodInfo& l : n.lods) report.bytes += l.bytes;
+  }
+  manifest.stats["nodes"] = static_cast<double>(report.nodes);
+  manifest.stats["leaves"] = static_cast<double>(report.leaves);
+  report.peak_rss_bytes = peak_rss_bytes();
+  manifest.stats["peak_rss_bytes"] = static_cast<double>(report.peak_rss_bytes);
+  manifest.stage_seconds["total"] = seconds_since(start);
+  const fs::path manifest_path = staging->path() / kManifestFileName;
+  OCTOLOD_RETURN_IF_ERROR(write_manifest(manifest_path, manifest));
+  report.bytes += fs::file_size(manifest_path, ec);
+
+  // publish
+  if (cleanup_signal_received()) return interrupted();
+  OCTOLOD_RETURN_IF_ERROR(publish_directory(staging->path(), output));
+  staging->release();
+  report.manifest = std::move(manifest);
+  return report;
+}
+
+}  // namespace
+
+Result<BakeReport> bake(const BakeOptions& options) {
+  Result<BakeReport> result = run_bake(options);
+  // A signal's cleanup may have made the bake fail (its directories vanished): let the watcher
+  // finish and kill the process rather than report that failure.
+  if (options.cleanup_on_signal && cleanup_signal_received()) await_signal_cleanup();
+  return result;
+}
+
+}  // namespace octolod::bake

@@ -1,0 +1,106 @@
+// Morton (Z-order) codes of triangle centroids in the octree's root cube (seed 3.4, 4.3: the
+// octree is built from the soup sorted by cell, so every node is one contiguous key range).
+//
+// A key holds `max_depth` levels of 3 bits, the coarsest level in the most significant triple;
+// within a triple bit 0 = upper x half, bit 1 = upper y half, bit 2 = upper z half, the octant
+// numbering of octolod/formats/manifest.h. The node at depth k containing a key is identified by
+// its prefix `key >> 3 * (max_depth - k)`, which is also the path of octants from the root.
+#pragma once
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+
+#include "octolod/formats/bounds.h"
+
+namespace octolod::bake {
+
+// Deepest octree supported: 21 levels x 3 bits fit in a 64-bit key.
+inline constexpr std::uint32_t kMaxOctreeDepth = 21;
+
+// Spreads the low 21 bits of v so bit i lands on bit 3i.
+constexpr std::uint64_t spread_bits_3(std::uint64_t v) {
+  v &= 0x1fffffu;
+  v = (v | (v << 32)) & 0x001f00000000ffffull;
+  v = (v | (v << 16)) & 0x001f0000ff0000ffull;
+  v = (v | (v << 8)) & 0x100f00f00f00f00full;
+  v = (v | (v << 4)) & 0x10c30c30c30c30c3ull;
+  v = (v | (v << 2)) & 0x1249249249249249ull;
+  return v;
+}
+
+constexpr std::uint64_t morton_encode(std::uint32_t x, std::uint32_t y, std::uint32_t z) {
+  return spread_bits_3(x) | (spread_bits_3(y) << 1) | (spread_bits_3(z) << 2);
+}
+
+// The octree's root cube: an axis-aligned cube (model units) holding every vertex.
+struct RootCube {
+  std::array<double, 3> origin{0, 0, 0};  // minimum corner
+  double size = 1;                        // edge length, > 0
+
+  // The cube around `bounds`: the bounds' minimum corner (moved down by a hair) and their
+  // largest extent enlarged by one part in 2^20, so points on the bounds' maximum faces
+  // quantize into the last cell rather than onto its far face. Empty or flat bounds give a
+  // non-zero size.
+  static RootCube around(const Bounds& bounds) {
+    RootCube cube;
+    if (bounds.empty()) return cube;
+    double extent = 0;
+    for (int a = 0; a < 3; ++a)
+      extent = std::max(extent, static_cast<double>(bounds.max[a]) - bounds.min[a]);
+    double magnitude = 0;
+    for (int a = 0; a < 3; ++a)
+      magnitude = std::max({magnitude, std::abs(static_cast<double>(bounds.min[a])),
+                            std::abs(static_cast<double>(bounds.max[a]))});
+    // Float positions are only precise to ~1e-7 of their magnitude: keep the margin above it.
+    const double margin = std::max(extent, magnitude) * 0x1p-20 + 0x1p-100;
+    for (int a = 0; a < 3; ++a) cube.origin[a] = static_cast<double>(bounds.min[a]) - margin;
+    cube.size = extent + 2 * margin;
+    return cube;
+  }
+
+  // The cell at `depth` whose octant path is `prefix` (see the top of this file), as float
+  // bounds. Computed from the root every time, so a child's cell lies inside its parent's.
+  Bounds cell(std::uint64_t prefix, std::uint32_t depth) const {
+    std::uint32_t c[3] = {0, 0, 0};
+    for (std::uint32_t k = 0; k < depth; ++k) {
+      const auto octant = static_cast<std::uint32_t>(prefix >> (3 * (depth - 1 - k))) & 7u;
+      for (int a = 0; a < 3; ++a) c[a] = (c[a] << 1) | ((octant >> a) & 1u);
+    }
+    const double cell_size = std::ldexp(size, -static_cast<int>(depth));
+    Bounds b;
+    for (int a = 0; a < 3; ++a) {
+      b.min[a] = static_cast<float>(origin[a] + c[a] * cell_size);
+      b.max[a] = static_cast<float>(origin[a] + (c[a] + 1.0) * cell_size);
+    }
+    return b;
+  }
+};
+
+// Maps centroids to keys of `depth` levels (0..kMaxOctreeDepth) in `cube`.
+class MortonQuantizer {
+ public:
+  MortonQuantizer(const RootCube& cube, std::uint32_t depth)
+      : origin_(cube.origin),
+        scale_(std::ldexp(1.0, static_cast<int>(depth)) / cube.size),
+        last_(depth == 0 ? 0 : (std::uint32_t{1} << depth) - 1) {}
+
+  // Key of the point p (model units); points outside the cube clamp to its border cells, NaN
+  // coordinates to the lower one.
+  std::uint64_t key(const double p[3]) const {
+    std::uint32_t q[3];
+    for (int a = 0; a < 3; ++a) {
+      const double t = std::floor((p[a] - origin_[a]) * scale_);
+      q[a] = !(t > 0) ? 0u : t >= last_ ? last_ : static_cast<std::uint32_t>(t);
+    }
+    return morton_encode(q[0], q[1], q[2]);
+  }
+
+ private:
+  std::array<double, 3> origin_;
+  double scale_;
+  std::uint32_t last_;
+};
+
+}  // namespace octolod::bake

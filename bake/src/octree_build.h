@@ -1,0 +1,83 @@
+// The on-disk octree's shape, decided in one streaming pass over the soup sorted by centroid
+// Morton code (seed 3.4, 4.3; ARCHITECTURE.md stage 3).
+//
+// The seed re-reads every triangle once per level to split the nodes of that level (I/O grows
+// with N x depth). Here the soup is sorted once by Morton key (external sort), which makes
+// every node a contiguous run of the sorted stream, and the tree is decided while that stream
+// passes by: a node whose triangles are still arriving is a *candidate* whose records are
+// buffered; when it collects more than max_tris it splits (its buffered records are replayed
+// into its children, which become the new candidates), and when the stream leaves its key range
+// it is a leaf and its records go to the caller. Memory: the candidate buffers, at most
+// max_tris + 1 records per level on the current path (a leaf at max_depth is unbounded: it
+// cannot split, so it keeps everything it gets).
+//
+// Rules (seed 3.4): a node splits while it holds more than max_tris triangles and its depth is
+// below max_depth; each triangle belongs to exactly one leaf, the one whose cell holds its
+// centroid; empty octants get no node.
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "octolod/formats/status.h"
+
+namespace octolod::bake {
+
+struct OctreeNode {
+  std::uint64_t prefix = 0;  // octant path from the root, 3 bits per level (morton.h)
+  std::uint32_t depth = 0;   // root = 0
+  std::int32_t parent = -1;  // index into OctreeBuilder::nodes(), -1 for the root
+  std::array<std::int32_t, 8> children{-1, -1, -1, -1, -1, -1, -1, -1};  // by octant
+  std::uint64_t triangles = 0;  // in the subtree (complete after finish())
+  bool leaf = false;
+
+  // "" for the root, else the octants from the root joined by '/': "3/5".
+  std::string path() const;
+};
+
+// Receives a finished leaf: its node index and its records in sorted order (ownership passes).
+using LeafFn = std::function<Status(std::int32_t node, std::vector<std::byte>&& records)>;
+
+class OctreeBuilder {
+ public:
+  // max_depth <= kMaxOctreeDepth (morton.h), max_tris >= 1; keys pushed must have max_depth
+  // levels. on_leaf is called from push()/finish(), in key order; an error it returns ends the
+  // build with that error.
+  OctreeBuilder(std::uint32_t max_tris, std::uint32_t max_depth, std::size_t record_bytes,
+                LeafFn on_leaf);
+
+  // The next records of the sorted stream and their keys (keys.size() records, non-decreasing
+  // keys across all calls).
+  Status push(std::span<const std::byte> records, std::span<const std::uint64_t> keys);
+  // Ends the stream: the last candidate becomes a leaf, subtree counts are summed.
+  Status finish();
+
+  // Parents precede their children; children in octant order (depth-first, key order).
+  const std::vector<OctreeNode>& nodes() const { return nodes_; }
+  std::vector<OctreeNode>& nodes() { return nodes_; }
+
+ private:
+  Status add(const std::byte* record, std::uint64_t key);
+  Status split_candidate();
+  Status close_candidate();
+  std::uint64_t prefix_of(std::uint64_t key, std::uint32_t depth) const {
+    return key >> (3 * (max_depth_ - depth));
+  }
+
+  std::uint32_t max_tris_;
+  std::uint32_t max_depth_;
+  std::size_t record_bytes_;
+  LeafFn on_leaf_;
+  std::vector<OctreeNode> nodes_;
+  std::vector<std::int32_t> open_;  // split nodes on the current key's path, root first
+  std::int32_t candidate_ = -1;     // the node whose records are being buffered
+  std::vector<std::byte> buffer_;   // the candidate's records
+  std::vector<std::uint64_t> buffer_keys_;
+};
+
+}  // namespace octolod::bake

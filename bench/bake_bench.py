@@ -1,0 +1,120 @@
+#!/usr/bin/env python3
+"""Benchmark of the bake core (soup + octree + leaf files; seed 3.4, 4.3, Table 5.1).
+
+Generates sample inputs with `octolod sample` (cached in the work directory), runs
+`octolod --json bake` under /usr/bin/time -v, and prints per-stage seconds, triangles/s and
+peak RSS (from the kernel, after the process ended: the manifest writing is included), then
+the seed's Table 5.1: leaves and build time against max-tris 1000..6000 at depths 5 and 8.
+
+  bench/bake_bench.py --cli build/cli/octolod [--work /tmp/bake-bench] [--sizes 1M,10M]
+                      [--memory 16M,64M,256M] [--threads 2] [--table-size 1M] [--no-table]
+                      [--markdown]
+--markdown prints the tables as Markdown (for docs/benchmarks.md).
+"""
+import argparse
+import json
+import os
+import re
+import shutil
+import subprocess
+import sys
+
+
+def run_bake(cli, ply, out, work, memory, threads, max_tris=2000, max_depth=10):
+    shutil.rmtree(out, ignore_errors=True)
+    cmd = ["/usr/bin/time", "-v", cli, "--json", "bake", ply, "-o", out, "--work-dir", work,
+           "--memory", memory, "--threads", str(threads), "--max-tris", str(max_tris),
+           "--max-depth", str(max_depth)]
+    p = subprocess.run(cmd, capture_output=True, text=True)
+    if p.returncode != 0:
+        sys.exit("bake failed: %s\n%s" % (" ".join(cmd), p.stderr))
+    report = json.loads(p.stdout)
+    rss_kib = int(re.search(r"Maximum resident set size \(kbytes\): (\d+)", p.stderr).group(1))
+    wall = re.search(r"Elapsed \(wall clock\) time \(h:mm:ss or m:ss\): ([\d:.]+)", p.stderr).group(1)
+    parts = [float(x) for x in wall.split(":")]
+    seconds = sum(v * 60 ** (len(parts) - 1 - i) for i, v in enumerate(parts))
+    report["process_peak_rss_mib"] = rss_kib / 1024.0
+    report["process_seconds"] = seconds
+    shutil.rmtree(out, ignore_errors=True)
+    return report
+
+
+def parse_count(text):
+    scale = {"K": 1e3, "M": 1e6, "G": 1e9}.get(text[-1].upper(), 1)
+    return int(float(text.rstrip("KMGkmg")) * scale)
+
+
+def mib(text):
+    scale = {"K": 1 / 1024, "M": 1, "G": 1024}.get(text[-1].upper(), 1 / 2 ** 20)
+    return float(text.rstrip("KMGkmg")) * scale
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--cli", required=True)
+    ap.add_argument("--work", default="/tmp/bake-bench")
+    ap.add_argument("--sizes", default="1M,10M")
+    ap.add_argument("--memory", default="16M,64M,256M")
+    ap.add_argument("--threads", type=int, default=2)
+    ap.add_argument("--table-size", default="1M")
+    ap.add_argument("--no-table", action="store_true")
+    ap.add_argument("--markdown", action="store_true")
+    args = ap.parse_args()
+    os.makedirs(args.work, exist_ok=True)
+    work_tmp = os.path.join(args.work, "tmp")
+    os.makedirs(work_tmp, exist_ok=True)
+    out = os.path.join(args.work, "out")
+
+    def sample(size):
+        ply = os.path.join(args.work, "rock-%s.ply" % size)
+        if not os.path.exists(ply):
+            subprocess.run([args.cli, "sample", "--shape", "rock", "--triangles", size, "-o", ply],
+                           check=True, capture_output=True)
+        return ply
+
+    sep = "|" if args.markdown else " "
+    def row(cells):
+        line = sep.join(str(c) for c in cells)
+        print(("| " + " | ".join(str(c) for c in cells) + " |") if args.markdown else line)
+
+    header = ["triangles", "memory", "soup path", "soup s", "octree sort s", "octree stream s",
+              "total s", "M tri/s", "nodes", "leaves", "sort runs", "peak RSS MiB",
+              "budget+24 MiB ok"]
+    row(header)
+    if args.markdown:
+        row(["---"] * len(header))
+    for size in args.sizes.split(","):
+        ply = sample(size)
+        for memory in args.memory.split(","):
+            r = run_bake(args.cli, ply, out, work_tmp, memory, args.threads)
+            s = r["stage_seconds"]
+            rss = r["process_peak_rss_mib"]
+            row([size, memory, "in core" if r["soup_in_core"] else "out of core",
+                 "%.2f" % s["soup"], "%.2f" % s["octree.sort"], "%.2f" % s["octree.stream"],
+                 "%.2f" % s["total"], "%.2f" % (r["triangles"] / s["total"] / 1e6), r["nodes"],
+                 r["leaves"], r["octree_sort_runs"], "%.1f" % rss,
+                 "yes" if rss <= mib(memory) + 24 else "NO"])
+            sys.stdout.flush()
+
+    if args.no_table:
+        return
+    print()
+    ply = sample(args.table_size)
+    header = ["max-tris"] + ["depth %d leaves" % d for d in (5, 8)] + \
+             ["depth %d seconds" % d for d in (5, 8)]
+    row(header)
+    if args.markdown:
+        row(["---"] * len(header))
+    for max_tris in range(1000, 7000, 1000):
+        cells = {}
+        for depth in (5, 8):
+            r = run_bake(args.cli, ply, out, work_tmp, "64M", args.threads, max_tris, depth)
+            cells[depth] = r
+        row([max_tris, cells[5]["leaves"], cells[8]["leaves"],
+             "%.2f" % cells[5]["stage_seconds"]["total"],
+             "%.2f" % cells[8]["stage_seconds"]["total"]])
+        sys.stdout.flush()
+
+
+if __name__ == "__main__":
+    main()

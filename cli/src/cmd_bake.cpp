@@ -1,0 +1,125 @@
+// octolod bake: a PLY mesh of any size becomes an on-disk LOD octree directory within a memory
+// budget (octolod/bake/bake.h; ARCHITECTURE.md stages 1-6).
+//
+// Exit codes: 1 usage, 2 bad input, 3 unsupported, 4 I/O (unwritable output, out of space, the
+// input vanishing while read). A failed or interrupted bake publishes nothing and leaves no
+// temporary file.
+#include <cstdio>
+#include <memory>
+#include <string>
+
+#include "command.h"
+#include "octolod/bake/bake.h"
+#include "progress.h"
+
+namespace octolod::cli {
+namespace {
+
+struct BakeArgs {
+  std::string input;
+  std::string output;
+  std::uint32_t max_tris = 2000;
+  std::uint32_t max_depth = 10;
+  std::string memory = "64M";
+  std::string work_dir;
+  unsigned threads = 0;
+  bool out_of_core = false;
+};
+
+nlohmann::json report_json(const bake::BakeReport& r, const std::string& output) {
+  const Manifest& m = r.manifest;
+  return {{"output", output},
+          {"input", m.parameters.input},
+          {"vertices", m.input_vertices},
+          {"triangles", m.input_triangles},
+          {"layout", m.layout.describe()},
+          {"nodes", r.nodes},
+          {"leaves", r.leaves},
+          {"depth", r.depth},
+          {"bytes", r.bytes},
+          {"soup_in_core", r.soup_in_core},
+          {"octree_sort_runs", r.sort_runs},
+          {"peak_rss_bytes", r.peak_rss_bytes},
+          {"parameters",
+           {{"max_tris", m.parameters.max_tris},
+            {"max_depth", m.parameters.max_depth},
+            {"memory_budget_bytes", m.parameters.memory_budget_bytes},
+            {"threads", m.parameters.threads}}},
+          {"stage_seconds", m.stage_seconds}};
+}
+
+int run_bake(const BakeArgs& args, const CommandContext& context) {
+  Result<std::uint64_t> memory = parse_byte_size(args.memory);
+  if (!memory.ok()) return report(memory.status());
+  bake::BakeOptions options;
+  options.input = args.input;
+  options.output = args.output;
+  options.max_tris = args.max_tris;
+  options.max_depth = args.max_depth;
+  options.memory_budget_bytes = memory.value();
+  options.work_dir = args.work_dir;
+  options.threads = args.threads;
+  options.force_out_of_core = args.out_of_core;
+  options.cleanup_on_signal = true;
+  Progress progress(context);
+  options.progress = [&](std::string_view stage, std::uint64_t done, std::uint64_t total) {
+    progress.update(std::string(stage), done, total);
+  };
+
+  Result<bake::BakeReport> baked = bake::bake(options);
+  if (!baked.ok()) return report(baked.status());
+  const bake::BakeReport& r = baked.value();
+  const auto& seconds = r.manifest.stage_seconds;
+  auto stage = [&](const char* name) {
+    auto it = seconds.find(name);
+    return it == seconds.end() ? 0.0 : it->second;
+  };
+  progress.finish("bake", stage("total"));
+  if (context.json) {
+    print_json(report_json(r, args.output));
+    return 0;
+  }
+  std::printf(
+      "%s: %llu triangles (%s) -> %llu nodes, %llu leaves, depth %u, %.1f MB in %.2f s "
+      "(soup %.2f s, octree %.2f s), peak RSS %.1f MiB\n",
+      args.output.c_str(), static_cast<unsigned long long>(r.manifest.input_triangles),
+      r.manifest.layout.describe().c_str(), static_cast<unsigned long long>(r.nodes),
+      static_cast<unsigned long long>(r.leaves), r.depth, static_cast<double>(r.bytes) / 1e6,
+      stage("total"), stage("soup"), stage("octree"),
+      static_cast<double>(r.peak_rss_bytes) / (1 << 20));
+  return 0;
+}
+
+}  // namespace
+
+void add_bake_command(CLI::App& app, CommandContext& context) {
+  auto args = std::make_shared<BakeArgs>();
+  CLI::App* command = app.add_subcommand(
+      "bake", "Bake a PLY mesh into an on-disk LOD octree directory (bounded memory)");
+  command->add_option("input", args->input, "Input .ply file")->required();
+  command->add_option("-o,--output", args->output,
+                      "Output directory (created; an earlier bake there is replaced atomically)")
+      ->required();
+  command
+      ->add_option("--max-tris", args->max_tris,
+                   "A node splits while it holds more triangles than this")
+      ->capture_default_str()
+      ->check(CLI::Range(1u, 1u << 30));
+  command
+      ->add_option("--max-depth", args->max_depth,
+                   "Deepest octree level (root = 0); leaves there keep all their triangles")
+      ->capture_default_str()
+      ->check(CLI::Range(0u, 21u));
+  command
+      ->add_option("--memory", args->memory,
+                   "Memory budget for the whole bake: 16M, 64M, 1G (peak RSS ~ this + a few MB)")
+      ->capture_default_str();
+  command->add_option("--work-dir", args->work_dir,
+                      "Directory for temporary files (default: next to the output)");
+  command->add_option("--threads", args->threads, "Worker threads (default: all cores)");
+  command->add_flag("--out-of-core", args->out_of_core,
+                    "Take the out-of-core soup path even when the vertices fit the budget");
+  command->callback([args, &context] { context.exit_code = run_bake(*args, context); });
+}
+
+}  // namespace octolod::cli

@@ -1,0 +1,484 @@
+// The bake pipeline (seed 3.4, 4.3; ARCHITECTURE.md stages 3 and 6): the leaves hold exactly
+// the input's triangles, the tree obeys max_tris / max_depth, bounds and cells are consistent,
+// the output does not depend on threads or budget, and failures (out of space, a killed or
+// interrupted bake, bad paths) publish nothing and leave no temporary file.
+#include <gtest/gtest.h>
+#include <fcntl.h>
+#include <signal.h>
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <chrono>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <map>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "octolod/bake/bake.h"
+#include "octolod/bake/soup.h"
+#include "octolod/formats/manifest.h"
+#include "octolod/formats/node_file.h"
+#include "octolod/samplegen/sample_generator.h"
+#include "record_file.h"
+
+namespace octolod::bake {
+namespace {
+
+namespace fs = std::filesystem;
+
+// Inputs shared by every test (generated once): a 60K-triangle rock with every attribute and a
+// 300K one for the tests that need a bake to run long enough to be killed.
+class BakeTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    root_ = fs::temp_directory_path() / ("octolod-bake-test-" + std::to_string(::getpid()));
+    fs::remove_all(root_);
+    fs::create_directories(root_);
+    samplegen::SampleSpec spec;
+    spec.shape = samplegen::Shape::rock;
+    spec.triangles = 60'000;
+    ASSERT_TRUE(samplegen::write_sample_ply(spec, small_ply()).ok());
+    spec.triangles = 300'000;
+    ASSERT_TRUE(samplegen::write_sample_ply(spec, large_ply()).ok());
+  }
+  static void TearDownTestSuite() { fs::remove_all(root_); }
+
+  void SetUp() override {
+    dir_ = root_ / ::testing::UnitTest::GetInstance()->current_test_info()->name();
+    fs::create_directories(dir_ / "work");
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  static fs::path small_ply() { return root_ / "rock60k.ply"; }
+  static fs::path large_ply() { return root_ / "rock300k.ply"; }
+  fs::path path(const std::string& name) const { return dir_ / name; }
+  fs::path work() const { return dir_ / "work"; }
+
+  BakeOptions options(const std::string& out) const {
+    BakeOptions o;
+    o.input = small_ply();
+    o.output = path(out);
+    o.max_tris = 1000;
+    o.max_depth = 8;
+    o.memory_budget_bytes = 16 << 20;
+    o.work_dir = work();
+    o.threads = 2;
+    return o;
+  }
+
+  // Names in `dir` that belong to a bake's temporary files.
+  static std::vector<std::string> temp_entries(const fs::path& dir) {
+    std::vector<std::string> found;
+    for (const auto& e : fs::directory_iterator(dir)) {
+      const std::string name = e.path().filename().string();
+      if (name.rfind(".octolod-tmp-", 0) == 0 || name.rfind("octolod-", 0) == 0 ||
+          name.find(".tmp") != std::string::npos)
+        found.push_back(name);
+    }
+    return found;
+  }
+  void expect_no_temp_files() const {
+    EXPECT_EQ(temp_entries(dir_), std::vector<std::string>{});
+    EXPECT_EQ(temp_entries(work()), std::vector<std::string>{});
+  }
+
+  static fs::path root_;
+  fs::path dir_;
+};
+
+fs::path BakeTest::root_;
+
+std::string read_bytes(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+}
+
+// Every file under `root`, relative path -> bytes.
+std::map<std::string, std::string> tree_files(const fs::path& root) {
+  std::map<std::string, std::string> files;
+  for (const auto& e : fs::recursive_directory_iterator(root))
+    if (e.is_regular_file()) files[fs::relative(e.path(), root).string()] = read_bytes(e.path());
+  return files;
+}
+
+// The manifest without what legitimately differs between bakes of the same tree.
+Manifest without_run_details(Manifest m) {
+  m.stage_seconds.clear();
+  m.stats.clear();
+  m.parameters.threads = 0;
+  m.parameters.memory_budget_bytes = 0;
+  return m;
+}
+
+using Triangle = std::vector<float>;  // 3 corners x layout.floats()
+
+// The input's triangles as the soup stage reads them from the PLY (order: PLY order).
+std::vector<Triangle> input_triangles(const fs::path& ply, const fs::path& work,
+                                      VertexLayout& layout) {
+  std::vector<Triangle> out;
+  SoupOptions o;
+  o.work_dir = work;
+  o.order = SoupOrder::by_triangle;
+  std::size_t record_bytes = 0;
+  o.sink = [&](std::span<const std::byte> records) {
+    for (std::size_t i = 0; i < records.size(); i += record_bytes) {
+      Triangle t(3 * layout.floats());
+      for (int c = 0; c < 3; ++c)
+        load_soup_corner(records.data() + i, layout, c, t.data() + c * layout.floats());
+      out.push_back(std::move(t));
+    }
+    return Status{};
+  };
+  // The layout is only known after the header: read it with a first, counting pass.
+  {
+    SoupOptions probe;
+    probe.work_dir = work;
+    probe.sink = [](std::span<const std::byte>) { return Status{}; };
+    auto r = build_soup(ply, probe);
+    EXPECT_TRUE(r.ok());
+    layout = r->layout;
+  }
+  record_bytes = soup_record_bytes(layout);
+  EXPECT_TRUE(build_soup(ply, o).ok());
+  return out;
+}
+
+std::vector<Triangle> mesh_triangles(const NodeMesh& mesh) {
+  std::vector<Triangle> out;
+  const std::size_t f = mesh.layout.floats();
+  for (std::size_t t = 0; t < mesh.triangle_count(); ++t) {
+    Triangle tri;
+    for (int c = 0; c < 3; ++c) {
+      const float* v = mesh.vertices.data() + std::size_t{mesh.indices[3 * t + static_cast<std::size_t>(c)]} * f;
+      tri.insert(tri.end(), v, v + f);
+    }
+    out.push_back(std::move(tri));
+  }
+  return out;
+}
+
+bool inside(const Bounds& outer, const Bounds& inner) {
+  for (int a = 0; a < 3; ++a)
+    if (inner.min[a] < outer.min[a] || inner.max[a] > outer.max[a]) return false;
+  return true;
+}
+
+TEST_F(BakeTest, LeavesHoldExactlyTheInputTrianglesInAConsistentTree) {
+  BakeOptions o = options("out");
+  o.max_tris = 700;
+  o.max_depth = 2;  // shallow enough that some leaves at max depth exceed max_tris
+  auto baked = bake(o);
+  ASSERT_TRUE(baked.ok()) << baked.status().message();
+  auto manifest = read_manifest(path("out") / "manifest.json");
+  ASSERT_TRUE(manifest.ok()) << manifest.status().message();
+  const Manifest& m = manifest.value();
+  EXPECT_EQ(without_run_details(m).nodes.size(), baked->nodes);
+
+  VertexLayout layout;
+  std::vector<Triangle> expected = input_triangles(small_ply(), work(), layout);
+  EXPECT_EQ(m.layout, layout);
+  EXPECT_EQ(m.input_triangles, expected.size());
+
+  std::vector<Triangle> found;
+  bool some_leaf_over_max = false;
+  for (const NodeInfo& n : m.nodes) {
+    if (n.parent >= 0) {
+      const NodeInfo& p = m.nodes[static_cast<std::size_t>(n.parent)];
+      EXPECT_TRUE(inside(p.cell, n.cell)) << n.path;
+      EXPECT_TRUE(inside(p.bounds, n.bounds)) << n.path;
+      EXPECT_EQ(n.path, (p.path.empty() ? "" : p.path + "/") +
+                            std::to_string(std::find(p.children.begin(), p.children.end(),
+                                                     &n - m.nodes.data()) - p.children.begin()));
+    }
+    if (!n.is_leaf()) {
+      EXPECT_GT(n.source_triangles, o.max_tris) << n.path;
+      EXPECT_TRUE(n.lods.empty());
+      std::uint64_t sum = 0;
+      for (std::int32_t c : n.children)
+        if (c >= 0) sum += m.nodes[static_cast<std::size_t>(c)].source_triangles;
+      EXPECT_EQ(sum, n.source_triangles);
+      continue;
+    }
+    EXPECT_TRUE(n.source_triangles <= o.max_tris || n.depth == o.max_depth) << n.path;
+    some_leaf_over_max = some_leaf_over_max || n.source_triangles > o.max_tris;
+    ASSERT_EQ(n.lods.size(), 1u);
+    EXPECT_EQ(n.lods[0].error, 0.0);
+    EXPECT_EQ(n.lods[0].file, (n.path.empty() ? "" : n.path + "/") + "lod0.olod");
+    const fs::path file = path("out") / n.lods[0].file;
+    EXPECT_EQ(fs::file_size(file), n.lods[0].bytes);
+    auto mesh = read_node_file(file);
+    ASSERT_TRUE(mesh.ok()) << mesh.status().message();
+    EXPECT_EQ(mesh->triangle_count(), n.source_triangles);
+    EXPECT_EQ(mesh->triangle_count(), n.lods[0].triangles);
+    EXPECT_EQ(mesh->vertex_count(), n.lods[0].vertices);
+    EXPECT_EQ(mesh->bounds(), n.bounds) << "tight bounds of " << n.path;
+    // Each triangle's centroid lies in the leaf's cell (up to float rounding of the cell).
+    const float slack = (n.cell.max[0] - n.cell.min[0]) * 1e-4f;
+    for (const Triangle& t : mesh_triangles(mesh.value())) {
+      for (int a = 0; a < 3; ++a) {
+        const float c = (t[static_cast<std::size_t>(a)] + t[layout.floats() + static_cast<std::size_t>(a)] +
+                         t[2 * layout.floats() + static_cast<std::size_t>(a)]) / 3.0f;
+        EXPECT_GE(c, n.cell.min[a] - slack);
+        EXPECT_LE(c, n.cell.max[a] + slack);
+      }
+      found.push_back(t);
+    }
+  }
+  EXPECT_TRUE(some_leaf_over_max) << "the test wants a leaf at max depth over max_tris";
+  EXPECT_EQ(m.nodes[0].source_triangles, expected.size());
+  EXPECT_EQ(m.bounds, m.nodes[0].bounds);
+  // Same multiset of triangles, attributes and winding included.
+  std::sort(expected.begin(), expected.end());
+  std::sort(found.begin(), found.end());
+  EXPECT_TRUE(found == expected);
+  expect_no_temp_files();
+}
+
+TEST_F(BakeTest, OneAndTwoThreadsWriteIdenticalTrees) {
+  BakeOptions one = options("one");
+  one.threads = 1;
+  BakeOptions two = options("two");
+  two.threads = 2;
+  ASSERT_TRUE(bake(one).ok());
+  ASSERT_TRUE(bake(two).ok());
+  auto a = tree_files(path("one"));
+  auto b = tree_files(path("two"));
+  auto ma = read_manifest(path("one") / "manifest.json");
+  auto mb = read_manifest(path("two") / "manifest.json");
+  ASSERT_TRUE(ma.ok() && mb.ok());
+  EXPECT_EQ(manifest_to_json(without_run_details(ma.value())),
+            manifest_to_json(without_run_details(mb.value())));
+  a.erase("manifest.json");
+  b.erase("manifest.json");
+  EXPECT_GT(a.size(), 20u);
+  EXPECT_TRUE(a == b);
+}
+
+TEST_F(BakeTest, TinyBudgetOutOfCoreGivesTheSameTreeAsALargeBudget) {
+  BakeOptions small = options("small");
+  small.memory_budget_bytes = 1 << 20;
+  small.force_out_of_core = true;
+  small.max_tris = 500;
+  BakeOptions large = options("large");
+  large.memory_budget_bytes = 256 << 20;
+  large.max_tris = 500;
+  auto rs = bake(small);
+  ASSERT_TRUE(rs.ok()) << rs.status().message();
+  auto rl = bake(large);
+  ASSERT_TRUE(rl.ok()) << rl.status().message();
+  EXPECT_FALSE(rs->soup_in_core);
+  EXPECT_TRUE(rl->soup_in_core);
+  EXPECT_GT(rs->sort_runs, 1u);
+  EXPECT_EQ(rl->sort_runs, 0u);
+  auto a = tree_files(path("small"));
+  auto b = tree_files(path("large"));
+  a.erase("manifest.json");
+  b.erase("manifest.json");
+  EXPECT_TRUE(a == b);
+  EXPECT_EQ(manifest_to_json(without_run_details(rs->manifest)),
+            manifest_to_json(without_run_details(rl->manifest)));
+}
+
+TEST_F(BakeTest, ASecondBakeReplacesTheFirstAtomically) {
+  ASSERT_TRUE(bake(options("out")).ok());
+  BakeOptions again = options("out");
+  again.max_tris = 3000;
+  auto r = bake(again);
+  ASSERT_TRUE(r.ok()) << r.status().message();
+  auto m = read_manifest(path("out") / "manifest.json");
+  ASSERT_TRUE(m.ok());
+  EXPECT_EQ(m->parameters.max_tris, 3000u);
+  // No file of the first tree survives: every file is listed in the new manifest.
+  std::size_t listed = 1;
+  for (const NodeInfo& n : m->nodes) listed += n.lods.size();
+  EXPECT_EQ(tree_files(path("out")).size(), listed);
+  expect_no_temp_files();
+}
+
+TEST_F(BakeTest, OutOfSpaceAnywhereLeavesThePreviousTreeAndNoTemporaryFile) {
+  ASSERT_TRUE(bake(options("out")).ok());
+  const auto before = tree_files(path("out"));
+  for (const std::uint64_t after :
+       {std::uint64_t{0}, std::uint64_t{1} << 20, std::uint64_t{5} << 20, std::uint64_t{12} << 20}) {
+    Status failure;
+    {
+      ScopedIoFault fault(ScopedIoFault::Op::write, after, ENOSPC);
+      BakeOptions o = options("out");
+      o.force_out_of_core = true;
+      o.memory_budget_bytes = 2 << 20;
+      auto r = bake(o);
+      if (!r.ok()) failure = r.status();
+    }
+    ASSERT_FALSE(failure.ok()) << "fault after " << after;
+    EXPECT_EQ(failure.code(), ErrorCode::io);
+    EXPECT_NE(failure.message().find("No space left on device"), std::string::npos)
+        << failure.message();
+    EXPECT_TRUE(tree_files(path("out")) == before);
+    expect_no_temp_files();
+  }
+}
+
+TEST_F(BakeTest, BadOptionsAndPathsAreReportedBeforeAnythingIsWritten) {
+  BakeOptions o = options("out");
+  o.max_tris = 0;
+  EXPECT_EQ(bake(o).status().code(), ErrorCode::usage);
+  o = options("out");
+  o.max_depth = 22;
+  EXPECT_EQ(bake(o).status().code(), ErrorCode::usage);
+  o = options("out");
+  o.memory_budget_bytes = 1000;
+  EXPECT_EQ(bake(o).status().code(), ErrorCode::usage);
+  o = options("out");
+  o.max_tris = 1'000'000;  // leaf buffers cannot fit a 16 MiB budget
+  EXPECT_EQ(bake(o).status().code(), ErrorCode::usage);
+  // A non-empty directory that is not a bake is never replaced.
+  fs::create_directories(path("mine"));
+  std::ofstream(path("mine") / "notes.txt") << "precious";
+  o = options("mine");
+  EXPECT_EQ(bake(o).status().code(), ErrorCode::usage);
+  EXPECT_EQ(read_bytes(path("mine") / "notes.txt"), "precious");
+  // Output under a regular file: the system refuses.
+  std::ofstream(path("file")) << "x";
+  o = options("file/out");
+  EXPECT_EQ(bake(o).status().code(), ErrorCode::io);
+  // Missing input.
+  o = options("out");
+  o.input = path("missing.ply");
+  EXPECT_EQ(bake(o).status().code(), ErrorCode::io);
+  EXPECT_FALSE(fs::exists(path("out")));
+  expect_no_temp_files();
+}
+
+TEST_F(BakeTest, EmptyMeshBakesToARootWithoutLods) {
+  std::ofstream(path("empty.ply")) << "ply\nformat ascii 1.0\nelement vertex 0\nproperty float x\n"
+                                      "property float y\nproperty float z\nelement face 0\n"
+                                      "property list uchar int vertex_indices\nend_header\n";
+  BakeOptions o = options("out");
+  o.input = path("empty.ply");
+  auto r = bake(o);
+  ASSERT_TRUE(r.ok()) << r.status().message();
+  auto m = read_manifest(path("out") / "manifest.json");
+  ASSERT_TRUE(m.ok()) << m.status().message();
+  ASSERT_EQ(m->nodes.size(), 1u);
+  EXPECT_TRUE(m->nodes[0].lods.empty());
+}
+
+// --- the CLI, run as a child process (OCTOLOD_CLI) ---
+
+const char* cli_path() { return std::getenv("OCTOLOD_CLI"); }
+
+// fork + exec of the CLI with `args`; `before_exec` runs in the child.
+pid_t spawn_cli(const std::vector<std::string>& args, void (*before_exec)() = nullptr) {
+  std::vector<char*> argv;
+  argv.push_back(const_cast<char*>(cli_path()));
+  for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+  argv.push_back(nullptr);
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    if (before_exec) before_exec();
+    const int devnull = ::open("/dev/null", O_WRONLY);
+    ::dup2(devnull, STDOUT_FILENO);
+    ::execv(argv[0], argv.data());
+    std::_Exit(127);
+  }
+  return pid;
+}
+
+int wait_status(pid_t pid) {
+  int status = 0;
+  while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+  }
+  return status;
+}
+
+// Waits until a bake child has created its temporary directory in `dir` (and a little more).
+void wait_for_temp_dir(const fs::path& dir, pid_t pid) {
+  const std::string prefix = ".octolod-tmp-" + std::to_string(pid) + "-";
+  for (int i = 0; i < 2000; ++i) {
+    for (const auto& e : fs::directory_iterator(dir))
+      if (e.path().filename().string().rfind(prefix, 0) == 0) return;
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
+}
+
+std::vector<std::string> bake_args(const fs::path& in, const fs::path& out, const fs::path& work) {
+  return {"bake", in.string(), "-o", out.string(), "--work-dir", work.string(), "--memory", "4M",
+          "--max-tris", "500", "--threads", "2"};
+}
+
+TEST_F(BakeTest, KilledBakeLeavesNothingThatBreaksTheNextRun) {
+  ASSERT_NE(cli_path(), nullptr);
+  const pid_t pid = spawn_cli(bake_args(large_ply(), path("out"), work()));
+  ASSERT_GT(pid, 0);
+  wait_for_temp_dir(work(), pid);
+  std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  ::kill(pid, SIGKILL);
+  const int status = wait_status(pid);
+  ASSERT_TRUE(WIFSIGNALED(status)) << "the bake finished before it was killed";
+  EXPECT_FALSE(fs::exists(path("out")));
+  EXPECT_FALSE(temp_entries(work()).empty()) << "SIGKILL cannot be cleaned up after";
+
+  const pid_t again = spawn_cli(bake_args(large_ply(), path("out"), work()));
+  const int again_status = wait_status(again);
+  ASSERT_TRUE(WIFEXITED(again_status));
+  EXPECT_EQ(WEXITSTATUS(again_status), 0);
+  EXPECT_TRUE(read_manifest(path("out") / "manifest.json").ok());
+  expect_no_temp_files();  // the dead bake's directories were removed too
+}
+
+TEST_F(BakeTest, InterruptedBakeRemovesItsTemporaryFilesAndDiesBySignal) {
+  ASSERT_NE(cli_path(), nullptr);
+  for (const int sig : {SIGINT, SIGTERM}) {
+    const pid_t pid = spawn_cli(bake_args(large_ply(), path("out"), work()));
+    wait_for_temp_dir(work(), pid);
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    ::kill(pid, sig);
+    const int status = wait_status(pid);
+    ASSERT_TRUE(WIFSIGNALED(status)) << "the bake finished before the signal";
+    EXPECT_EQ(WTERMSIG(status), sig);
+    EXPECT_FALSE(fs::exists(path("out")));
+    expect_no_temp_files();
+  }
+}
+
+void limit_file_size() {
+  ::signal(SIGXFSZ, SIG_IGN);  // writes past the limit fail with EFBIG instead of killing
+  rlimit limit{256 << 10, 256 << 10};
+  ::setrlimit(RLIMIT_FSIZE, &limit);
+}
+
+TEST_F(BakeTest, CliExitCodesForWriteFailureBadInputAndUnwritableOutput) {
+  ASSERT_NE(cli_path(), nullptr);
+  // Writes refused by the system (file size limit): exit 4, nothing left behind.
+  int status = wait_status(spawn_cli(bake_args(small_ply(), path("out"), work()), limit_file_size));
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 4);
+  EXPECT_FALSE(fs::exists(path("out")));
+  expect_no_temp_files();
+
+  std::ofstream(path("bad.ply")) << "ply\nformat ascii 1.0\nelement vertex 1\nend_header\n";
+  status = wait_status(spawn_cli(bake_args(path("bad.ply"), path("out"), work())));
+  EXPECT_EQ(WEXITSTATUS(status), 2);
+  std::ofstream(path("file")) << "x";
+  status = wait_status(spawn_cli(bake_args(small_ply(), path("file") / "out", work())));
+  EXPECT_EQ(WEXITSTATUS(status), 4);
+  expect_no_temp_files();
+
+  status = wait_status(spawn_cli(bake_args(small_ply(), path("out"), work())));
+  EXPECT_EQ(WEXITSTATUS(status), 0);
+  status = wait_status(spawn_cli({"--json", "info", path("out").string()}));
+  EXPECT_EQ(WEXITSTATUS(status), 0);
+  status = wait_status(spawn_cli({"info", path("missing").string()}));
+  EXPECT_EQ(WEXITSTATUS(status), 4);
+}
+
+}  // namespace
+}  // namespace octolod::bake

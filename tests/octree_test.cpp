@@ -1,0 +1,210 @@
+// The octree's building blocks (seed 3.4, 4.3): Morton keys, the root cube and its cells, the
+// one-pass OctreeBuilder, and the exact vertex dedup that turns leaf records into a NodeMesh.
+#include <gtest/gtest.h>
+
+#include <cstring>
+#include <map>
+#include <vector>
+
+#include "morton.h"
+#include "node_index.h"
+#include "octolod/bake/soup.h"
+#include "octree_build.h"
+
+namespace octolod::bake {
+namespace {
+
+TEST(Morton, OctantBitsAreXThenYThenZ) {
+  EXPECT_EQ(morton_encode(1, 0, 0), 1u);
+  EXPECT_EQ(morton_encode(0, 1, 0), 2u);
+  EXPECT_EQ(morton_encode(0, 0, 1), 4u);
+  EXPECT_EQ(morton_encode(2, 0, 0), 8u);
+  // The top level of a 21-level key is its three highest bits.
+  const std::uint32_t top = 1u << 20;
+  EXPECT_EQ(morton_encode(top, top, top) >> 60, 7u);
+  EXPECT_EQ(morton_encode(0x1fffff, 0x1fffff, 0x1fffff), (std::uint64_t{1} << 63) - 1);
+}
+
+TEST(Morton, QuantizerPutsBoundsCornersInTheFirstAndLastCells) {
+  Bounds b;
+  b.min = {-1, 0, 2};
+  b.max = {3, 1, 2.5f};
+  const RootCube cube = RootCube::around(b);
+  const MortonQuantizer q(cube, 3);
+  const double lo[3] = {-1, 0, 2};
+  const double hi[3] = {3, 0, 2};  // max x face: the last cell in x
+  EXPECT_EQ(q.key(lo), 0u);
+  EXPECT_EQ(q.key(hi), morton_encode(7, 0, 0));
+  const double outside[3] = {-5, 9, 2};  // clamped
+  EXPECT_EQ(q.key(outside), morton_encode(0, 7, 0));
+}
+
+TEST(Morton, ChildCellsNestInTheirParentAndTileIt) {
+  Bounds b;
+  b.min = {0.1f, -3, 7};
+  b.max = {1.3f, 2, 7.5f};
+  const RootCube cube = RootCube::around(b);
+  const Bounds root = cube.cell(0, 0);
+  for (int a = 0; a < 3; ++a) {
+    EXPECT_LE(root.min[a], b.min[a]);
+    EXPECT_GE(root.max[a], b.max[a]);
+  }
+  for (std::uint64_t parent = 0; parent < 64; ++parent) {
+    const Bounds p = cube.cell(parent, 2);
+    for (std::uint64_t octant = 0; octant < 8; ++octant) {
+      const Bounds c = cube.cell(parent << 3 | octant, 3);
+      for (int a = 0; a < 3; ++a) {
+        EXPECT_GE(c.min[a], p.min[a]);
+        EXPECT_LE(c.max[a], p.max[a]);
+        const bool upper = ((octant >> a) & 1u) != 0;
+        EXPECT_EQ(upper ? c.max[a] : c.min[a], upper ? p.max[a] : p.min[a]);
+      }
+    }
+  }
+}
+
+// Records of 8 bytes holding their own index, keys given directly.
+struct Stream {
+  std::vector<std::byte> records;
+  std::vector<std::uint64_t> keys;
+  void add(std::uint64_t key) {
+    const std::uint64_t id = keys.size();
+    keys.push_back(key);
+    const auto* p = reinterpret_cast<const std::byte*>(&id);
+    records.insert(records.end(), p, p + sizeof id);
+  }
+};
+
+struct BuiltTree {
+  std::vector<OctreeNode> nodes;
+  std::map<std::int32_t, std::vector<std::uint64_t>> leaves;  // node -> record ids
+};
+
+BuiltTree build(const Stream& s, std::uint32_t max_tris, std::uint32_t max_depth,
+                std::size_t batch) {
+  BuiltTree t;
+  OctreeBuilder builder(max_tris, max_depth, 8,
+                        [&](std::int32_t node, std::vector<std::byte>&& records) {
+                          auto& ids = t.leaves[node];
+                          EXPECT_TRUE(ids.empty()) << "leaf " << node << " handed out twice";
+                          for (std::size_t i = 0; i < records.size(); i += 8) {
+                            std::uint64_t id;
+                            std::memcpy(&id, records.data() + i, 8);
+                            ids.push_back(id);
+                          }
+                          return Status{};
+                        });
+  for (std::size_t i = 0; i < s.keys.size(); i += batch) {
+    const std::size_t n = std::min(batch, s.keys.size() - i);
+    EXPECT_TRUE(builder
+                    .push(std::span(s.records).subspan(i * 8, n * 8),
+                          std::span(s.keys).subspan(i, n))
+                    .ok());
+  }
+  EXPECT_TRUE(builder.finish().ok());
+  t.nodes = builder.nodes();
+  return t;
+}
+
+//  depth 2, keys = 2 levels (6 bits): octant of level 1 in bits 3..5, level 2 in bits 0..2.
+//  root (7 records, max_tris 2) splits; child 0 holds 4 -> splits into 0/1 (2), 0/5 (2);
+//  child 3 holds 1 (leaf); child 6 holds 2 (leaf).
+TEST(OctreeBuilder, SplitsNodesOverMaxTrisAndHandsOutEveryRecordOnce) {
+  Stream s;
+  for (std::uint64_t k : {001u, 001u, 005u, 005u, 032u, 060u, 067u}) s.add(k);
+  for (std::size_t batch : {1u, 3u, 100u}) {
+    const BuiltTree t = build(s, 2, 2, batch);
+    ASSERT_EQ(t.nodes.size(), 6u);
+    EXPECT_EQ(t.nodes[0].path(), "");
+    EXPECT_FALSE(t.nodes[0].leaf);
+    EXPECT_EQ(t.nodes[0].triangles, 7u);
+    EXPECT_EQ(t.nodes[1].path(), "0");
+    EXPECT_EQ(t.nodes[1].triangles, 4u);
+    EXPECT_EQ(t.nodes[2].path(), "0/1");
+    EXPECT_EQ(t.nodes[3].path(), "0/5");
+    EXPECT_EQ(t.nodes[4].path(), "3");
+    EXPECT_EQ(t.nodes[5].path(), "6");
+    EXPECT_EQ(t.nodes[0].children[0], 1);
+    EXPECT_EQ(t.nodes[0].children[3], 4);
+    EXPECT_EQ(t.nodes[0].children[6], 5);
+    EXPECT_EQ(t.nodes[1].children[1], 2);
+    EXPECT_EQ(t.nodes[1].children[5], 3);
+    EXPECT_EQ(t.nodes[3].parent, 1);
+    const std::map<std::int32_t, std::vector<std::uint64_t>> expected{
+        {2, {0, 1}}, {3, {2, 3}}, {4, {4}}, {5, {5, 6}}};
+    EXPECT_EQ(t.leaves, expected);
+  }
+}
+
+TEST(OctreeBuilder, LeavesAtMaxDepthKeepEverything) {
+  Stream s;
+  for (int i = 0; i < 10; ++i) s.add(012u);  // all in 1/2
+  s.add(013u);
+  const BuiltTree t = build(s, 3, 2, 4);
+  ASSERT_EQ(t.nodes.size(), 4u);  // root, 1, 1/2 (10 records), 1/3
+  EXPECT_EQ(t.nodes[2].path(), "1/2");
+  EXPECT_TRUE(t.nodes[2].leaf);
+  EXPECT_EQ(t.nodes[2].triangles, 10u);
+  EXPECT_EQ(t.leaves.at(2).size(), 10u);
+  EXPECT_EQ(t.leaves.at(3), std::vector<std::uint64_t>{10});
+}
+
+TEST(OctreeBuilder, SmallInputIsASingleRootLeaf) {
+  Stream s;
+  for (std::uint64_t k : {0u, 0777u, 0123u}) s.add(k);
+  std::sort(s.keys.begin(), s.keys.end());
+  const BuiltTree t = build(s, 3, 3, 2);
+  ASSERT_EQ(t.nodes.size(), 1u);
+  EXPECT_TRUE(t.nodes[0].leaf);
+  EXPECT_EQ(t.leaves.at(0).size(), 3u);
+}
+
+TEST(OctreeBuilder, DepthZeroKeepsEverythingInTheRoot) {
+  Stream s;
+  for (int i = 0; i < 5; ++i) s.add(0);
+  const BuiltTree t = build(s, 1, 0, 2);
+  ASSERT_EQ(t.nodes.size(), 1u);
+  EXPECT_EQ(t.leaves.at(0).size(), 5u);
+}
+
+TEST(OctreeBuilder, LeafErrorEndsTheBuild) {
+  OctreeBuilder builder(1, 1, 8, [](std::int32_t, std::vector<std::byte>&&) {
+    return io_error("disk full");
+  });
+  Stream s;
+  s.add(0);
+  s.add(1);
+  s.add(2);
+  const Status st = builder.push(s.records, s.keys);
+  EXPECT_EQ(st.code(), ErrorCode::io);
+}
+
+// Two triangles sharing edge (1,2):   0 --- 1      records: (0,1,2), (2,1,3)
+//                                     |   / |      vertex 1 of the second triangle has another
+//                                     | /   |      uv (a seam): it stays a separate vertex.
+//                                     2 --- 3
+TEST(NodeIndexer, MergesBitIdenticalCornersAndKeepsSeams) {
+  const VertexLayout layout{false, false, true};  // position + uv
+  const std::vector<float> vertices = {0, 1, 0, 0, 1,  1, 1, 0, 1, 1,  0, 0, 0, 0, 0,
+                                       1, 0, 0, 1, 0,  1, 1, 0, 0.5f, 1};
+  const std::vector<std::uint32_t> triangles = {0, 1, 2, 2, 4, 3};
+  const std::vector<std::byte> soup =
+      dereference_in_memory(vertices, triangles, layout, SoupOrder::by_triangle);
+  NodeIndexer indexer;
+  NodeMesh mesh;
+  indexer.index(soup, layout, mesh);
+  EXPECT_EQ(mesh.layout, layout);
+  EXPECT_EQ(mesh.indices, (std::vector<std::uint32_t>{0, 1, 2, 2, 3, 4}));
+  ASSERT_EQ(mesh.vertex_count(), 5u);
+  const std::vector<float> expected = {0, 1, 0, 0, 1,  1, 1, 0, 1, 1,  0, 0, 0, 0, 0,
+                                       1, 1, 0, 0.5f, 1,  1, 0, 0, 1, 0};
+  EXPECT_EQ(mesh.vertices, expected);
+
+  // Reuse: a second, smaller node replaces the first.
+  indexer.index(std::span(soup).first(soup_record_bytes(layout)), layout, mesh);
+  EXPECT_EQ(mesh.indices, (std::vector<std::uint32_t>{0, 1, 2}));
+  EXPECT_EQ(mesh.vertex_count(), 3u);
+}
+
+}  // namespace
+}  // namespace octolod::bake
