@@ -1,0 +1,204 @@
+// Conservative one-sided Hausdorff bound from an input mesh to its simplification (seed 3.5.3).
+//
+// For a fixed output triangle T', x -> dist(x, T') is convex, so over an input triangle t it is
+// largest at one of t's corners: max_{x in t} dist(x, output) <= min over T' of max over t's
+// corners of dist(corner, T'). Candidates T' are the output triangles nearest to t's corners (and,
+// when refining, to its centroid), found with the closest-point BVH of measure/. Where the bound
+// of t is far above the distances of its corners (t spans a ridge of the output, say), t is split
+// in four (midpoints) and the bound is the max over the parts, a few levels deep. Only triangles
+// whose bound exceeds the best total so far are refined — the total is a max — so the cost is a
+// little more than one BVH query per input vertex.
+#include "error_bound.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <tuple>
+#include <utility>
+#include <vector>
+
+#include "octolod/measure/triangle_bvh.h"
+
+namespace octolod::bake {
+namespace {
+
+using Vec = std::array<double, 3>;
+
+Vec sub(const Vec& a, const Vec& b) { return {a[0] - b[0], a[1] - b[1], a[2] - b[2]}; }
+double dot(const Vec& a, const Vec& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+
+// Distance from p to triangle (a,b,c), Ericson 2005, 5.1.5 ClosestPtPointTriangle, in double.
+double point_triangle_distance(const Vec& p, const Vec& a, const Vec& b, const Vec& c) {
+  const Vec ab = sub(b, a), ac = sub(c, a), ap = sub(p, a);
+  auto dist_to = [&p](const Vec& q) { const Vec d = sub(p, q); return std::sqrt(dot(d, d)); };
+  auto lerp = [](const Vec& x, const Vec& y, double t) {
+    return Vec{x[0] + t * (y[0] - x[0]), x[1] + t * (y[1] - x[1]), x[2] + t * (y[2] - x[2])};
+  };
+  const double d1 = dot(ab, ap), d2 = dot(ac, ap);
+  if (d1 <= 0.0 && d2 <= 0.0) return dist_to(a);
+  const Vec bp = sub(p, b);
+  const double d3 = dot(ab, bp), d4 = dot(ac, bp);
+  if (d3 >= 0.0 && d4 <= d3) return dist_to(b);
+  const double vc = d1 * d4 - d3 * d2;
+  if (vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0) return dist_to(lerp(a, b, d1 / (d1 - d3)));
+  const Vec cp = sub(p, c);
+  const double d5 = dot(ab, cp), d6 = dot(ac, cp);
+  if (d6 >= 0.0 && d5 <= d6) return dist_to(c);
+  const double vb = d5 * d2 - d1 * d6;
+  if (vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0) return dist_to(lerp(a, c, d2 / (d2 - d6)));
+  const double va = d3 * d6 - d5 * d4;
+  if (va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0)
+    return dist_to(lerp(b, c, (d4 - d3) / ((d4 - d3) + (d5 - d6))));
+  const double denom = va + vb + vc;
+  if (!(denom > 0.0)) {  // degenerate triangle: its edges
+    double best = std::min({dist_to(a), dist_to(b), dist_to(c)});
+    const Vec* ends[3][2] = {{&a, &b}, {&b, &c}, {&c, &a}};
+    for (const auto& e : ends) {
+      const Vec d = sub(*e[1], *e[0]);
+      const double len2 = dot(d, d);
+      if (len2 > 0.0) best = std::min(best, dist_to(lerp(*e[0], *e[1], std::clamp(dot(sub(p, *e[0]), d) / len2, 0.0, 1.0))));
+    }
+    return best;
+  }
+  const double v = vb / denom, w = vc / denom;
+  return dist_to({a[0] + ab[0] * v + ac[0] * w, a[1] + ab[1] * v + ac[1] * w, a[2] + ab[2] * v + ac[2] * w});
+}
+
+constexpr int kMaxRefineDepth = 4;
+
+class Bounder {
+ public:
+  Bounder(const NodeMesh& output)
+      : output_(output),
+        stride_(output.layout.floats()),
+        bvh_(output.vertices, output.layout.floats(), output.indices) {}
+
+  Vec position(std::uint32_t output_triangle, int corner) const {
+    const float* f = &output_.vertices[output_.indices[3 * std::size_t{output_triangle} + static_cast<std::size_t>(corner)] * stride_];
+    return {f[0], f[1], f[2]};
+  }
+  double distance(const Vec& p, std::uint32_t output_triangle) const {
+    return point_triangle_distance(p, position(output_triangle, 0), position(output_triangle, 1),
+                                   position(output_triangle, 2));
+  }
+  // Nearest output triangle to p and the distance to it (double precision).
+  std::pair<std::uint32_t, double> nearest(const Vec& p) const {
+    const auto hit = bvh_.closest(glm::vec3(static_cast<float>(p[0]), static_cast<float>(p[1]), static_cast<float>(p[2])));
+    return {hit.triangle, distance(p, hit.triangle)};
+  }
+
+  // min over candidates of the max distance of the corners to it.
+  double corner_bound(const std::array<Vec, 3>& corners, const std::vector<std::uint32_t>& candidates) const {
+    double best = std::numeric_limits<double>::infinity();
+    for (std::uint32_t candidate : candidates) {
+      double worst = 0.0;
+      for (const Vec& c : corners) {
+        worst = std::max(worst, distance(c, candidate));
+        if (worst >= best) break;
+      }
+      best = std::min(best, worst);
+    }
+    return best;
+  }
+
+  // Bound of the triangle `corners` whose corners are at distances `corner_distance`; parts
+  // whose bound is at most `enough` are not refined further.
+  double refine(const std::array<Vec, 3>& corners, const std::array<double, 3>& corner_distance,
+                std::vector<std::uint32_t> candidates, double enough, int depth) const {
+    const Vec centroid{(corners[0][0] + corners[1][0] + corners[2][0]) / 3.0,
+                       (corners[0][1] + corners[1][1] + corners[2][1]) / 3.0,
+                       (corners[0][2] + corners[1][2] + corners[2][2]) / 3.0};
+    candidates.push_back(nearest(centroid).first);
+    const double bound = corner_bound(corners, candidates);
+    const double lower = std::max({corner_distance[0], corner_distance[1], corner_distance[2]});
+    if (depth >= kMaxRefineDepth || bound <= enough || bound <= lower * 1.05) return bound;
+    std::array<Vec, 3> mid;
+    std::array<double, 3> mid_distance;
+    for (int k = 0; k < 3; ++k) {
+      const Vec& a = corners[static_cast<std::size_t>(k)];
+      const Vec& b = corners[static_cast<std::size_t>((k + 1) % 3)];
+      mid[static_cast<std::size_t>(k)] = {(a[0] + b[0]) / 2, (a[1] + b[1]) / 2, (a[2] + b[2]) / 2};
+      const auto [triangle, d] = nearest(mid[static_cast<std::size_t>(k)]);
+      candidates.push_back(triangle);
+      mid_distance[static_cast<std::size_t>(k)] = d;
+    }
+    std::sort(candidates.begin(), candidates.end());
+    candidates.erase(std::unique(candidates.begin(), candidates.end()), candidates.end());
+    const std::array<std::array<Vec, 3>, 4> parts{{{corners[0], mid[0], mid[2]},
+                                                   {mid[0], corners[1], mid[1]},
+                                                   {mid[2], mid[1], corners[2]},
+                                                   {mid[0], mid[1], mid[2]}}};
+    const std::array<std::array<double, 3>, 4> part_distance{{{corner_distance[0], mid_distance[0], mid_distance[2]},
+                                                              {mid_distance[0], corner_distance[1], mid_distance[1]},
+                                                              {mid_distance[2], mid_distance[1], corner_distance[2]},
+                                                              {mid_distance[0], mid_distance[1], mid_distance[2]}}};
+    double result = 0.0;
+    for (std::size_t i = 0; i < 4; ++i) {
+      result = std::max(result, refine(parts[i], part_distance[i], candidates, std::max(enough, result), depth + 1));
+    }
+    return std::min(result, bound);
+  }
+
+ private:
+  const NodeMesh& output_;
+  std::size_t stride_;
+  measure::TriangleBvh bvh_;
+};
+
+}  // namespace
+
+double hausdorff_upper_bound(const NodeMesh& input, const NodeMesh& output) {
+  if (input.triangle_count() == 0) return 0.0;
+  if (output.triangle_count() == 0) return std::numeric_limits<double>::infinity();
+  const Bounder bounder(output);
+  const std::size_t stride = input.layout.floats();
+  auto input_position = [&](std::uint32_t v) {
+    const float* f = &input.vertices[v * stride];
+    return Vec{f[0], f[1], f[2]};
+  };
+
+  // nearest output triangle of every input vertex used by a triangle; their max is a lower bound
+  constexpr std::uint32_t kUnset = std::numeric_limits<std::uint32_t>::max();
+  std::vector<std::uint32_t> nearest_triangle(input.vertex_count(), kUnset);
+  std::vector<double> nearest_distance(input.vertex_count(), 0.0);
+  double total = 0.0;
+  for (std::uint32_t v : input.indices) {
+    if (nearest_triangle[v] != kUnset) continue;
+    std::tie(nearest_triangle[v], nearest_distance[v]) = bounder.nearest(input_position(v));
+    total = std::max(total, nearest_distance[v]);
+  }
+
+  // per triangle: bound from its corners' nearest triangles
+  struct Pending {
+    double bound;
+    std::uint32_t triangle;
+  };
+  std::vector<Pending> pending;
+  for (std::size_t t = 0; t < input.triangle_count(); ++t) {
+    const std::uint32_t* corner = &input.indices[3 * t];
+    const std::array<Vec, 3> corners{input_position(corner[0]), input_position(corner[1]), input_position(corner[2])};
+    const std::vector<std::uint32_t> candidates{nearest_triangle[corner[0]], nearest_triangle[corner[1]],
+                                                nearest_triangle[corner[2]]};
+    const double bound = bounder.corner_bound(corners, candidates);
+    if (bound > total) pending.push_back({bound, static_cast<std::uint32_t>(t)});
+  }
+
+  // refine the worst first while they can raise the total
+  std::sort(pending.begin(), pending.end(), [](const Pending& a, const Pending& b) {
+    return a.bound != b.bound ? a.bound > b.bound : a.triangle < b.triangle;
+  });
+  for (const Pending& p : pending) {
+    if (p.bound <= total) break;
+    const std::uint32_t* corner = &input.indices[3 * std::size_t{p.triangle}];
+    const std::array<Vec, 3> corners{input_position(corner[0]), input_position(corner[1]), input_position(corner[2])};
+    std::vector<std::uint32_t> candidates{nearest_triangle[corner[0]], nearest_triangle[corner[1]],
+                                          nearest_triangle[corner[2]]};
+    const std::array<double, 3> distances{nearest_distance[corner[0]], nearest_distance[corner[1]],
+                                          nearest_distance[corner[2]]};
+    total = std::max(total, bounder.refine(corners, distances, std::move(candidates), total, 0));
+  }
+  return total * (1.0 + 1e-6);
+}
+
+}  // namespace octolod::bake

@@ -1,0 +1,179 @@
+// Generalized quadrics (Garland & Heckbert 1998, section 3) and their robust minimization by a
+// symmetric eigen-decomposition (cyclic Jacobi, Golub & Van Loan 8.5) and pseudo-inverse.
+#include "quadric.h"
+
+#include <algorithm>
+#include <array>
+#include <cassert>
+#include <cmath>
+
+namespace octolod::bake {
+namespace {
+
+using Matrix = std::array<double, kMaxQuadricDim * kMaxQuadricDim>;
+using Vector = std::array<double, kMaxQuadricDim>;
+
+std::size_t packed_index(int n, int i, int j) {  // i <= j
+  return static_cast<std::size_t>(i * n - i * (i - 1) / 2 + (j - i));
+}
+
+double dot(int n, const double* x, const double* y) {
+  double s = 0.0;
+  for (int i = 0; i < n; ++i) s += x[i] * y[i];
+  return s;
+}
+
+// Eigen-decomposition of the symmetric m x m matrix `a` (row-major, stride kMaxQuadricDim; its
+// content is destroyed): eigenvalues in `values`, eigenvectors as the COLUMNS of `vectors`.
+void symmetric_eigen(int m, Matrix& a, Vector& values, Matrix& vectors) {
+  constexpr int s = kMaxQuadricDim;
+  for (int i = 0; i < m; ++i)
+    for (int j = 0; j < m; ++j) vectors[static_cast<std::size_t>(i * s + j)] = i == j ? 1.0 : 0.0;
+  auto at = [&a](int i, int j) -> double& { return a[static_cast<std::size_t>(i * s + j)]; };
+  auto vec = [&vectors](int i, int j) -> double& {
+    return vectors[static_cast<std::size_t>(i * s + j)];
+  };
+  for (int sweep = 0; sweep < 50; ++sweep) {
+    double off = 0.0, diag = 0.0;
+    for (int i = 0; i < m; ++i) {
+      diag += at(i, i) * at(i, i);
+      for (int j = i + 1; j < m; ++j) off += at(i, j) * at(i, j);
+    }
+    if (off <= 1e-30 * diag || off == 0.0) break;
+    for (int p = 0; p < m; ++p) {
+      for (int q = p + 1; q < m; ++q) {
+        const double apq = at(p, q);
+        if (apq == 0.0) continue;
+        const double theta = (at(q, q) - at(p, p)) / (2.0 * apq);
+        const double t = (theta >= 0 ? 1.0 : -1.0) / (std::fabs(theta) + std::sqrt(theta * theta + 1.0));
+        const double c = 1.0 / std::sqrt(t * t + 1.0);
+        const double sn = t * c;
+        for (int k = 0; k < m; ++k) {  // columns p, q
+          const double akp = at(k, p), akq = at(k, q);
+          at(k, p) = c * akp - sn * akq;
+          at(k, q) = sn * akp + c * akq;
+        }
+        for (int k = 0; k < m; ++k) {  // rows p, q
+          const double apk = at(p, k), aqk = at(q, k);
+          at(p, k) = c * apk - sn * aqk;
+          at(q, k) = sn * apk + c * aqk;
+        }
+        for (int k = 0; k < m; ++k) {
+          const double vkp = vec(k, p), vkq = vec(k, q);
+          vec(k, p) = c * vkp - sn * vkq;
+          vec(k, q) = sn * vkp + c * vkq;
+        }
+      }
+    }
+  }
+  for (int i = 0; i < m; ++i) values[static_cast<std::size_t>(i)] = at(i, i);
+}
+
+// x = x0 + M^+ (rhs - M x0) for the symmetric m x m matrix M (row-major, stride
+// kMaxQuadricDim, destroyed): the solution of M x = rhs (least squares) nearest x0.
+void solve_nearest(int m, Matrix& mat, const double* rhs, const double* x0, double* x) {
+  constexpr int s = kMaxQuadricDim;
+  Vector residual{};
+  for (int i = 0; i < m; ++i) {
+    double r = rhs[i];
+    for (int j = 0; j < m; ++j) r -= mat[static_cast<std::size_t>(i * s + j)] * x0[j];
+    residual[static_cast<std::size_t>(i)] = r;
+  }
+  Vector values{};
+  Matrix vectors{};
+  symmetric_eigen(m, mat, values, vectors);
+  double largest = 0.0;
+  for (int i = 0; i < m; ++i) largest = std::max(largest, std::fabs(values[static_cast<std::size_t>(i)]));
+  for (int i = 0; i < m; ++i) x[i] = x0[i];
+  if (largest == 0.0) return;
+  const double threshold = kPseudoInverseThreshold * largest;
+  for (int e = 0; e < m; ++e) {
+    const double lambda = values[static_cast<std::size_t>(e)];
+    if (std::fabs(lambda) <= threshold) continue;
+    double projection = 0.0;
+    for (int i = 0; i < m; ++i)
+      projection += vectors[static_cast<std::size_t>(i * s + e)] * residual[static_cast<std::size_t>(i)];
+    const double scale = projection / lambda;
+    for (int i = 0; i < m; ++i) x[i] += scale * vectors[static_cast<std::size_t>(i * s + e)];
+  }
+}
+
+}  // namespace
+
+void triangle_quadric(int n, const double* p, const double* q, const double* r, double weight,
+                      double* out) {
+  assert(n >= 3 && n <= kMaxQuadricDim && "quadric dimension must be 3..11");
+  const std::size_t count = quadric_doubles(n);
+  std::fill(out, out + count, 0.0);
+  if (weight <= 0.0) return;
+  Vector e1{}, e2{};
+  for (int i = 0; i < n; ++i) e1[static_cast<std::size_t>(i)] = q[i] - p[i];
+  const double len1 = std::sqrt(dot(n, e1.data(), e1.data()));
+  if (!(len1 > 0.0)) return;
+  for (int i = 0; i < n; ++i) e1[static_cast<std::size_t>(i)] /= len1;
+  Vector rp{};
+  for (int i = 0; i < n; ++i) rp[static_cast<std::size_t>(i)] = r[i] - p[i];
+  const double along = dot(n, e1.data(), rp.data());
+  for (int i = 0; i < n; ++i)
+    e2[static_cast<std::size_t>(i)] = rp[static_cast<std::size_t>(i)] - along * e1[static_cast<std::size_t>(i)];
+  const double len2 = std::sqrt(dot(n, e2.data(), e2.data()));
+  // Collinear in R^n: no plane. Relative test, so tiny well-shaped triangles still count.
+  if (!(len2 > 1e-12 * len1)) return;
+  for (int i = 0; i < n; ++i) e2[static_cast<std::size_t>(i)] /= len2;
+
+  double* a = out;
+  for (int i = 0; i < n; ++i) {
+    const auto ui = static_cast<std::size_t>(i);
+    for (int j = i; j < n; ++j) {
+      const auto uj = static_cast<std::size_t>(j);
+      const double v = (i == j ? 1.0 : 0.0) - e1[ui] * e1[uj] - e2[ui] * e2[uj];
+      a[packed_index(n, i, j)] = weight * v;
+    }
+  }
+  double* b = out + n * (n + 1) / 2;
+  const double pe1 = dot(n, p, e1.data());
+  const double pe2 = dot(n, p, e2.data());
+  for (int i = 0; i < n; ++i) {
+    const auto ui = static_cast<std::size_t>(i);
+    b[i] = weight * (pe1 * e1[ui] + pe2 * e2[ui] - p[i]);
+  }
+  out[count - 1] = weight * (dot(n, p, p) - pe1 * pe1 - pe2 * pe2);
+}
+
+double evaluate_quadric(int n, const double* q, const double* v) {
+  double s = 0.0;
+  for (int i = 0; i < n; ++i) {
+    s += q[packed_index(n, i, i)] * v[i] * v[i];
+    for (int j = i + 1; j < n; ++j) s += 2.0 * q[packed_index(n, i, j)] * v[i] * v[j];
+  }
+  const double* b = q + n * (n + 1) / 2;
+  s += 2.0 * dot(n, b, v);
+  return s + q[quadric_doubles(n) - 1];
+}
+
+void minimize_quadric(int n, const double* q, const double* mean, double* v) {
+  minimize_quadric_free_tail(n, 0, q, mean, v);
+}
+
+void minimize_quadric_free_tail(int n, int k, const double* q, const double* mean_free,
+                                double* v) {
+  assert(k >= 0 && k < n && n <= kMaxQuadricDim && "free coordinates k..n-1 must be non-empty");
+  const int m = n - k;
+  Matrix mat{};
+  Vector rhs{};
+  const double* b = q + n * (n + 1) / 2;
+  for (int i = 0; i < m; ++i) {
+    const int gi = k + i;
+    double r = -b[gi];
+    for (int j = 0; j < k; ++j) r -= q[packed_index(n, j, gi)] * v[j];  // A_fx v_x
+    rhs[static_cast<std::size_t>(i)] = r;
+    for (int j = 0; j < m; ++j) {
+      const int gj = k + j;
+      mat[static_cast<std::size_t>(i * kMaxQuadricDim + j)] =
+          q[packed_index(n, std::min(gi, gj), std::max(gi, gj))];
+    }
+  }
+  solve_nearest(m, mat, rhs.data(), mean_free, v + k);
+}
+
+}  // namespace octolod::bake

@@ -1,0 +1,60 @@
+// Generalized quadric error metrics in R^n (Garland & Heckbert 1998, "Simplifying surfaces with
+// color and texture using quadric error metrics", section 3; seed 3.5, 4.4). A vertex is a point
+// v in R^n: position x,y,z followed by its attribute floats (normal +3, colour +3, uv +2, in
+// VertexLayout order), so n is 3..11. For a triangle T = (p,q,r) in R^n:
+//   e1 = (q-p)/|q-p|,  e2 = (r-p-(e1.(r-p))e1)/|...|        orthonormal basis of T's plane
+//   A  = I - e1 e1^T - e2 e2^T,  b = (p.e1)e1 + (p.e2)e2 - p,  c = p.p - (p.e1)^2 - (p.e2)^2
+// and Q(v) = v^T A v + 2 b^T v + c is the squared distance from v to the plane of T in R^n. With
+// n = 3 it is the classic plane quadric (Garland & Heckbert 1997) of the position alone.
+// Quadrics are weighted by the triangle's area in 3D (attributes do not change the weight) and
+// summed in double precision. Callers translate positions to a local origin (the node's cell
+// centre) first: c = p.p - ... cancels catastrophically far from the origin.
+//
+// Storage: a quadric of dimension n is quadric_floats(n) doubles: A's upper triangle packed row by
+// row (n(n+1)/2), then b (n), then c. Sums are plain element-wise additions.
+#pragma once
+
+#include <cstddef>
+
+namespace octolod::bake {
+
+inline constexpr int kMaxQuadricDim = 11;
+
+constexpr std::size_t quadric_doubles(int n) {
+  return static_cast<std::size_t>(n * (n + 1) / 2 + n + 1);
+}
+inline constexpr std::size_t kMaxQuadricDoubles = quadric_doubles(kMaxQuadricDim);
+
+// Writes weight * (A, b, c) of the triangle (p,q,r) in R^n into `out` (quadric_doubles(n)).
+// A triangle that is degenerate in R^n (coincident or collinear corners) writes zeros, as does
+// weight 0.
+void triangle_quadric(int n, const double* p, const double* q, const double* r, double weight,
+                      double* out);
+
+// acc += q, both of dimension n.
+inline void add_quadric(int n, double* acc, const double* q) {
+  const std::size_t count = quadric_doubles(n);
+  for (std::size_t i = 0; i < count; ++i) acc[i] += q[i];
+}
+
+// Q(v) = v^T A v + 2 b^T v + c.
+double evaluate_quadric(int n, const double* q, const double* v);
+
+// Relative eigenvalue threshold of the pseudo-inverse: eigen-directions of A whose eigenvalue is
+// below this fraction of the largest are treated as unconstrained (Lindstrom 2000 uses 1e-3 for
+// the same purpose), so nearly flat clusters keep their representative near the mean instead of
+// sliding far along a weakly curved direction.
+inline constexpr double kPseudoInverseThreshold = 1e-3;
+
+// The minimizer of Q nearest to `mean` (both R^n): v = mean + A^+ (-b - A mean), A^+ the
+// pseudo-inverse from a symmetric eigen-decomposition with kPseudoInverseThreshold. Exactly
+// `mean` when A is zero (no triangles).
+void minimize_quadric(int n, const double* q, const double* mean, double* v);
+
+// Minimizes Q over the coordinates k..n-1 with v[0..k) fixed (e.g. the attributes of a wedge
+// with its position fixed, k = 3): solves A_ff v_f = -(b_f + A_fx v_x) by pseudo-inverse, the
+// solution nearest to mean_free (n-k values) in the null space. Writes v[k..n).
+void minimize_quadric_free_tail(int n, int k, const double* q, const double* mean_free,
+                                double* v);
+
+}  // namespace octolod::bake

@@ -1,0 +1,72 @@
+// bake::simplify_node: input checks, node preparation (weld, position ids, boundary) and the
+// choice between the seed's operator and the grid (seed 3.5, 4.4), with the error bound of the
+// result (seed 3.5.3).
+#include <cmath>
+#include <string>
+
+#include "cluster.h"
+#include "error_bound.h"
+#include "octolod/bake/simplify.h"
+#include "wedges.h"
+
+namespace octolod::bake {
+namespace {
+
+Status check_mesh(const NodeMesh& mesh) {
+  const std::size_t stride = mesh.layout.floats();
+  if (mesh.vertices.size() % stride != 0)
+    return bad_input_error("node mesh: " + std::to_string(mesh.vertices.size()) +
+                           " vertex floats is not a multiple of " + std::to_string(stride) + " (" +
+                           mesh.layout.describe() + ")");
+  if (mesh.indices.size() % 3 != 0)
+    return bad_input_error("node mesh: " + std::to_string(mesh.indices.size()) + " indices is not a multiple of 3");
+  const std::size_t vertex_count = mesh.vertex_count();
+  for (std::size_t i = 0; i < mesh.indices.size(); ++i)
+    if (mesh.indices[i] >= vertex_count)
+      return bad_input_error("node mesh: index " + std::to_string(i) + " is " + std::to_string(mesh.indices[i]) +
+                             ", but there are only " + std::to_string(vertex_count) + " vertices");
+  for (std::size_t v = 0; v < vertex_count; ++v)
+    for (std::size_t k = 0; k < 3; ++k)
+      if (!std::isfinite(mesh.vertices[v * stride + k]))
+        return bad_input_error("node mesh: vertex " + std::to_string(v) + " has a non-finite position");
+  return {};
+}
+
+}  // namespace
+
+PreparedNode prepare_node(const NodeMesh& mesh, const Bounds& cell) {
+  PreparedNode node;
+  node.mesh = weld_identical_vertices(mesh);
+  node.positions = make_position_ids(node.mesh);
+  node.boundary = find_boundary(node.mesh, node.positions);
+  node.cell = cell;
+  node.mesh_bounds = node.mesh.bounds();
+  for (std::size_t i = 0; i < 3; ++i)
+    node.origin[i] = 0.5 * (static_cast<double>(cell.min[i]) + static_cast<double>(cell.max[i]));
+  return node;
+}
+
+Result<SimplifyResult> simplify_node(const NodeMesh& input, const Bounds& cell,
+                                     const SimplifyOptions& options) {
+  OCTOLOD_RETURN_IF_ERROR(check_mesh(input));
+  if (cell.empty()) return usage_error("simplify_node: the node cell is empty");
+  if (options.method == ClusterMethod::grid && options.target_triangles == 0 && options.grid_resolution == 0)
+    return usage_error("simplify_node: the grid method needs target_triangles or grid_resolution");
+  SimplifyResult result;
+  result.mesh.layout = input.layout;
+  if (input.triangle_count() == 0) return result;
+
+  const PreparedNode node = prepare_node(input, cell);
+  if (options.method == ClusterMethod::bade2006) {
+    result.mesh = cluster_bade2006(node);
+  } else {
+    const std::uint32_t g = options.target_triangles > 0
+                                ? choose_grid_resolution(node, options.target_triangles)
+                                : options.grid_resolution;
+    result.mesh = cluster_grid(node, g);
+  }
+  result.error_bound = hausdorff_upper_bound(node.mesh, result.mesh);
+  return result;
+}
+
+}  // namespace octolod::bake

@@ -1,0 +1,56 @@
+// From a clustering of a node mesh's vertices to the simplified mesh (seed 3.5, 4.4; Garland &
+// Heckbert 1998; wedges as in Hoppe 1999, "New quadric metric for simplifying meshes with
+// appearance attributes"): the step the grid method shares with any other vertex clustering.
+//
+// A wedge is a set of corners of one cluster connected through original edges inside that
+// cluster (union-find on vertex ids). Corners on the two sides of a uv/normal/colour seam are
+// different vertex ids joined by no edge, so they stay different wedges and the seam is never
+// averaged across. The cluster gets one position (from its summed position-only quadric), each
+// wedge one attribute vector (from its own generalized quadric with that position fixed).
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "octolod/formats/node_file.h"
+
+namespace octolod::bake {
+
+// Welds vertices whose records (all floats) have identical bits; the first occurrence keeps its
+// relative order, indices are remapped. Identical records are one wedge of one vertex.
+NodeMesh weld_identical_vertices(const NodeMesh& mesh);
+
+struct ClampBox {
+  std::array<double, 3> min;
+  std::array<double, 3> max;
+};
+
+struct Clustering {
+  std::vector<std::uint32_t> of_vertex;  // cluster of each vertex; clusters in output order
+  std::uint32_t count = 0;
+  // Per cluster: 1 when its vertices are kept verbatim (locked boundary: every vertex record its
+  // own wedge, bit-identical). Otherwise its position is clamped into box (local coordinates).
+  std::vector<std::uint8_t> locked;
+  std::vector<ClampBox> box;
+};
+
+// Builds the clustered mesh. `origin` (model units) is subtracted from positions for the quadric
+// arithmetic; clamp boxes are relative to it. Triangles: a triangle survives when its corners are
+// in three distinct clusters; the surviving triangles are counted per cluster triple and kept
+// once when the count is odd, dropped when even (the output is the mod-2 image of the input, so
+// its boundary is exactly the image of the input's boundary: nothing opens, and a sheet folded
+// onto itself cancels instead of becoming two coincident faces). A kept triangle takes its
+// wedges from its first source triangle, and the orientation whose normal agrees with the
+// area-weighted normals of its source triangles (flipped triangles are re-wound, not dropped:
+// dropping would open the surface). Triangles with two corners at bit-identical positions are
+// dropped (their edges cancel mod 2). Unused vertices are removed; output vertices are in
+// (cluster, smallest vertex id of the wedge) order.
+NodeMesh build_clustered_mesh(const NodeMesh& mesh, const Clustering& clustering,
+                              const std::array<double, 3>& origin);
+
+// Post-processing of a solved attribute vector in VertexLayout order (after the position):
+// normals renormalized (`fallback_normal` when zero), colours clamped to 0..1.
+void finish_attributes(VertexLayout layout, const double* fallback_normal, double* attributes);
+
+}  // namespace octolod::bake
