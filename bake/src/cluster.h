@@ -8,6 +8,7 @@
 #include <cstdint>
 
 #include "boundary_edges.h"
+#include "wedges.h"
 #include "octolod/formats/bounds.h"
 #include "octolod/formats/node_file.h"
 
@@ -26,12 +27,13 @@ struct PreparedNode {
 PreparedNode prepare_node(const NodeMesh& mesh, const Bounds& cell);
 
 // Grid method at resolution g (cells along the longest side of cell ∪ mesh bounds, g >= 1).
-NodeMesh cluster_grid(const PreparedNode& node, std::uint32_t g);
+ClusteredMesh cluster_grid(const PreparedNode& node, std::uint32_t g);
 // Triangles cluster_grid(node, g) would keep (before the rare drop of triangles whose corners
 // coincide after rounding), without solving any quadric: what the resolution search evaluates.
 std::size_t count_grid_triangles(const PreparedNode& node, std::uint32_t g);
 // The resolution whose output has at most `target` triangles and is as fine as a short search
-// finds (the count is nearly but not exactly monotone in g); 1 when even g = 1 exceeds it.
+// finds (at most 8 counts; it stops within 15% below the target; the count is nearly but not
+// exactly monotone in g); 1 when even g = 1 exceeds it.
 std::uint32_t choose_grid_resolution(const PreparedNode& node, std::size_t target);
 
 // The seed's operator: one representative, every boundary edge fanned to it. Empty when the node

@@ -6,10 +6,12 @@
 // own. wedges.cpp turns the clustering into the mesh.
 #include <algorithm>
 #include <cmath>
+#include <numeric>
 #include <utility>
 #include <vector>
 
 #include "cluster.h"
+#include "flat_hash.h"
 #include "wedges.h"
 
 namespace octolod::bake {
@@ -67,75 +69,106 @@ std::vector<std::uint64_t> vertex_keys(const PreparedNode& node, const GridDomai
 }
 
 // Dense cluster ids in ascending key order (grid cells first, then locked positions in order of
-// first use), and the sorted distinct keys.
+// first use), and the sorted distinct keys. A hash table assigns ids in order of first use; only
+// the distinct keys are sorted.
 std::pair<std::vector<std::uint32_t>, std::vector<std::uint64_t>> dense_ids(
-    const std::vector<std::uint64_t>& keys) {
-  std::vector<std::uint64_t> distinct = keys;
-  std::sort(distinct.begin(), distinct.end());
-  distinct.erase(std::unique(distinct.begin(), distinct.end()), distinct.end());
+    const std::vector<std::uint64_t>& keys, bool sorted_ids) {
+  FlatHashMap<2> table(keys.size());
+  std::vector<std::uint64_t> distinct;
   std::vector<std::uint32_t> ids(keys.size());
-  for (std::size_t v = 0; v < keys.size(); ++v)
-    ids[v] = static_cast<std::uint32_t>(std::lower_bound(distinct.begin(), distinct.end(), keys[v]) - distinct.begin());
-  return {std::move(ids), std::move(distinct)};
+  for (std::size_t v = 0; v < keys.size(); ++v) {
+    bool inserted = false;
+    ids[v] = table.find_or_insert({static_cast<std::uint32_t>(keys[v] >> 32), static_cast<std::uint32_t>(keys[v])},
+                                  static_cast<std::uint32_t>(distinct.size()), inserted);
+    if (inserted) distinct.push_back(keys[v]);
+  }
+  if (!sorted_ids) return {std::move(ids), std::move(distinct)};
+  std::vector<std::uint32_t> by_key(distinct.size());
+  std::iota(by_key.begin(), by_key.end(), 0u);
+  std::sort(by_key.begin(), by_key.end(), [&distinct](std::uint32_t a, std::uint32_t b) { return distinct[a] < distinct[b]; });
+  std::vector<std::uint32_t> rank(distinct.size());
+  std::vector<std::uint64_t> sorted(distinct.size());
+  for (std::size_t r = 0; r < by_key.size(); ++r) {
+    rank[by_key[r]] = static_cast<std::uint32_t>(r);
+    sorted[r] = distinct[by_key[r]];
+  }
+  for (std::uint32_t& id : ids) id = rank[id];
+  return {std::move(ids), std::move(sorted)};
+}
+
+double surface_area(const NodeMesh& mesh) {
+  const std::size_t stride = mesh.layout.floats();
+  double area = 0.0;
+  for (std::size_t t = 0; t < mesh.triangle_count(); ++t) {
+    const float* p[3];
+    for (std::size_t k = 0; k < 3; ++k) p[k] = &mesh.vertices[mesh.indices[3 * t + k] * stride];
+    const double e1[3] = {double(p[1][0]) - p[0][0], double(p[1][1]) - p[0][1], double(p[1][2]) - p[0][2]};
+    const double e2[3] = {double(p[2][0]) - p[0][0], double(p[2][1]) - p[0][1], double(p[2][2]) - p[0][2]};
+    const double nx = e1[1] * e2[2] - e1[2] * e2[1], ny = e1[2] * e2[0] - e1[0] * e2[2], nz = e1[0] * e2[1] - e1[1] * e2[0];
+    area += 0.5 * std::sqrt(nx * nx + ny * ny + nz * nz);
+  }
+  return area;
 }
 
 }  // namespace
 
 std::size_t count_grid_triangles(const PreparedNode& node, std::uint32_t g) {
   const GridDomain grid = make_domain(node, g);
-  const auto [cluster, distinct] = dense_ids(vertex_keys(node, grid));
-  struct Triple {
-    std::uint32_t c[3];
-    bool operator<(const Triple& o) const {
-      return c[0] != o.c[0] ? c[0] < o.c[0] : c[1] != o.c[1] ? c[1] < o.c[1] : c[2] < o.c[2];
-    }
-    bool operator==(const Triple& o) const = default;
-  };
-  std::vector<Triple> triples;
-  triples.reserve(node.mesh.triangle_count());
-  for (std::size_t t = 0; t < node.mesh.triangle_count(); ++t) {
-    Triple triple{{cluster[node.mesh.indices[3 * t]], cluster[node.mesh.indices[3 * t + 1]],
-                   cluster[node.mesh.indices[3 * t + 2]]}};
-    std::sort(triple.c, triple.c + 3);
-    if (triple.c[0] == triple.c[1] || triple.c[1] == triple.c[2]) continue;
-    triples.push_back(triple);
-  }
-  std::sort(triples.begin(), triples.end());
+  const auto [cluster, distinct] = dense_ids(vertex_keys(node, grid), false);
+  // parity per cluster triple: the number of triples seen an odd number of times
+  FlatHashMap<3> parity(node.mesh.triangle_count());
+  std::vector<std::uint8_t> odd;
   std::size_t count = 0;
-  for (std::size_t i = 0; i < triples.size();) {
-    std::size_t j = i + 1;
-    while (j < triples.size() && triples[j] == triples[i]) ++j;
-    count += (j - i) % 2;
-    i = j;
+  for (std::size_t t = 0; t < node.mesh.triangle_count(); ++t) {
+    std::array<std::uint32_t, 3> triple{cluster[node.mesh.indices[3 * t]], cluster[node.mesh.indices[3 * t + 1]],
+                                        cluster[node.mesh.indices[3 * t + 2]]};
+    std::sort(triple.begin(), triple.end());
+    if (triple[0] == triple[1] || triple[1] == triple[2]) continue;
+    bool inserted = false;
+    const std::uint32_t index = parity.find_or_insert(triple, static_cast<std::uint32_t>(odd.size()), inserted);
+    if (inserted) odd.push_back(0);
+    odd[index] ^= 1u;
+    if (odd[index]) ++count;
+    else --count;
   }
   return count;
 }
 
 std::uint32_t choose_grid_resolution(const PreparedNode& node, std::size_t target) {
-  // Triangles grow about like g^2 on a surface: guess from a power law through the last
-  // evaluation, keep a feasible lower and an infeasible upper end, stop when they are close.
+  // Triangles grow about like g^2 on a surface. First guess from the area: a surface crosses
+  // about 1.5 A / s^2 cubes of side s, and a closed mesh has about 2 triangles per vertex.
+  // Then power-law corrections through the last count, keeping a feasible lower and an
+  // infeasible upper end; stop once the count is within 15% below the target.
   if (count_grid_triangles(node, 1) > target) return 1;
   constexpr std::uint32_t kMaxResolution = 1u << 16;
+  Bounds domain = node.cell;
+  domain.extend(node.mesh_bounds);
+  const double side = std::max({static_cast<double>(domain.max[0]) - domain.min[0],
+                                static_cast<double>(domain.max[1]) - domain.min[1],
+                                static_cast<double>(domain.max[2]) - domain.min[2]});
+  const double area = surface_area(node.mesh);
+  double guess = area > 0.0 ? side * std::sqrt(static_cast<double>(target) / (3.0 * area)) : 8.0;
   std::uint32_t lo = 1, hi = kMaxResolution + 1;
-  std::uint32_t g = 8;
-  for (int evaluation = 0; evaluation < 10 && hi - lo > std::max(1u, lo / 32); ++evaluation) {
+  std::uint32_t g = static_cast<std::uint32_t>(std::clamp(guess, 2.0, static_cast<double>(kMaxResolution)));
+  for (int evaluation = 0; evaluation < 8 && hi - lo > 1; ++evaluation) {
     g = std::clamp(g, lo + 1, hi - 1);
     const std::size_t count = count_grid_triangles(node, g);
     if (count <= target) lo = g;
     else hi = g;
-    if (count >= node.mesh.triangle_count() && count <= target) break;  // nothing left to merge
-    const double ratio = count > 0 ? std::sqrt(static_cast<double>(target) / static_cast<double>(count)) : 4.0;
+    if (count <= target && (count >= node.mesh.triangle_count() || static_cast<double>(count) >= 0.85 * static_cast<double>(target)))
+      break;  // close enough, or nothing left to merge
+    const double ratio = count > 0 ? std::sqrt(0.95 * static_cast<double>(target) / static_cast<double>(count)) : 4.0;
     const double next = std::clamp(static_cast<double>(g) * ratio, static_cast<double>(g) / 4.0,
-                                    static_cast<double>(g) * 4.0);
+                                   static_cast<double>(g) * 4.0);
     g = static_cast<std::uint32_t>(std::lround(next));
     if (g <= lo || g >= hi) g = lo + (hi - lo) / 2;  // the model stalled: bisect
   }
   return lo;
 }
 
-NodeMesh cluster_grid(const PreparedNode& node, std::uint32_t g) {
+ClusteredMesh cluster_grid(const PreparedNode& node, std::uint32_t g) {
   const GridDomain grid = make_domain(node, g);
-  auto [cluster, distinct] = dense_ids(vertex_keys(node, grid));
+  auto [cluster, distinct] = dense_ids(vertex_keys(node, grid), true);
   Clustering clustering;
   clustering.of_vertex = std::move(cluster);
   clustering.count = static_cast<std::uint32_t>(distinct.size());

@@ -67,6 +67,8 @@ double point_triangle_distance(const Vec& p, const Vec& a, const Vec& b, const V
 
 constexpr int kMaxRefineDepth = 4;
 
+constexpr std::uint32_t kNoHint = 0xFFFFFFFFu;
+
 class Bounder {
  public:
   Bounder(const NodeMesh& output)
@@ -146,11 +148,9 @@ class Bounder {
   measure::TriangleBvh bvh_;
 };
 
-}  // namespace
-
-double hausdorff_upper_bound(const NodeMesh& input, const NodeMesh& output) {
-  if (input.triangle_count() == 0) return 0.0;
-  if (output.triangle_count() == 0) return std::numeric_limits<double>::infinity();
+// Raises `total` to a bound over the input triangles `triangles` by closest-point queries.
+double bvh_bound(const NodeMesh& input, const NodeMesh& output, const std::vector<std::uint32_t>& triangles,
+                 double total) {
   const Bounder bounder(output);
   const std::size_t stride = input.layout.floats();
   auto input_position = [&](std::uint32_t v) {
@@ -158,15 +158,17 @@ double hausdorff_upper_bound(const NodeMesh& input, const NodeMesh& output) {
     return Vec{f[0], f[1], f[2]};
   };
 
-  // nearest output triangle of every input vertex used by a triangle; their max is a lower bound
+  // nearest output triangle of every corner; their max is a lower bound
   constexpr std::uint32_t kUnset = std::numeric_limits<std::uint32_t>::max();
   std::vector<std::uint32_t> nearest_triangle(input.vertex_count(), kUnset);
   std::vector<double> nearest_distance(input.vertex_count(), 0.0);
-  double total = 0.0;
-  for (std::uint32_t v : input.indices) {
-    if (nearest_triangle[v] != kUnset) continue;
-    std::tie(nearest_triangle[v], nearest_distance[v]) = bounder.nearest(input_position(v));
-    total = std::max(total, nearest_distance[v]);
+  for (std::uint32_t t : triangles) {
+    for (std::size_t k = 0; k < 3; ++k) {
+      const std::uint32_t v = input.indices[3 * std::size_t{t} + k];
+      if (nearest_triangle[v] != kUnset) continue;
+      std::tie(nearest_triangle[v], nearest_distance[v]) = bounder.nearest(input_position(v));
+      total = std::max(total, nearest_distance[v]);
+    }
   }
 
   // per triangle: bound from its corners' nearest triangles
@@ -175,13 +177,13 @@ double hausdorff_upper_bound(const NodeMesh& input, const NodeMesh& output) {
     std::uint32_t triangle;
   };
   std::vector<Pending> pending;
-  for (std::size_t t = 0; t < input.triangle_count(); ++t) {
-    const std::uint32_t* corner = &input.indices[3 * t];
+  for (std::uint32_t t : triangles) {
+    const std::uint32_t* corner = &input.indices[3 * std::size_t{t}];
     const std::array<Vec, 3> corners{input_position(corner[0]), input_position(corner[1]), input_position(corner[2])};
     const std::vector<std::uint32_t> candidates{nearest_triangle[corner[0]], nearest_triangle[corner[1]],
                                                 nearest_triangle[corner[2]]};
     const double bound = bounder.corner_bound(corners, candidates);
-    if (bound > total) pending.push_back({bound, static_cast<std::uint32_t>(t)});
+    if (bound > total) pending.push_back({bound, t});
   }
 
   // refine the worst first while they can raise the total
@@ -198,7 +200,56 @@ double hausdorff_upper_bound(const NodeMesh& input, const NodeMesh& output) {
                                           nearest_distance[corner[2]]};
     total = std::max(total, bounder.refine(corners, distances, std::move(candidates), total, 0));
   }
+  return total;
+}
+
+}  // namespace
+
+double hausdorff_upper_bound(const NodeMesh& input, const NodeMesh& output,
+                             std::span<const std::uint32_t> nearby_output_triangle) {
+  if (input.triangle_count() == 0) return 0.0;
+  if (output.triangle_count() == 0) return std::numeric_limits<double>::infinity();
+  const std::size_t in_stride = input.layout.floats();
+  const std::size_t out_stride = output.layout.floats();
+  auto output_corner = [&](std::uint32_t triangle, std::size_t k) {
+    const float* f = &output.vertices[output.indices[3 * std::size_t{triangle} + k] * out_stride];
+    return Vec{f[0], f[1], f[2]};
+  };
+
+  // triangles with a hint: max over their corners of the distance to the hinted triangle (the
+  // distance to a fixed triangle is convex, so its max over the input triangle is at a corner)
+  double total = 0.0;
+  std::vector<std::uint32_t> unhinted;
+  for (std::size_t t = 0; t < input.triangle_count(); ++t) {
+    const std::uint32_t hint = nearby_output_triangle.empty() ? kNoHint : nearby_output_triangle[t];
+    if (hint == kNoHint || hint >= output.triangle_count()) {
+      unhinted.push_back(static_cast<std::uint32_t>(t));
+      continue;
+    }
+    const Vec a = output_corner(hint, 0);
+    Vec b{}, c{};
+    bool have_triangle = false;
+    for (std::size_t k = 0; k < 3; ++k) {
+      const float* f = &input.vertices[input.indices[3 * t + k] * in_stride];
+      const Vec p{f[0], f[1], f[2]};
+      // |p - a| bounds the distance from above: skip the exact distance when it cannot raise
+      // the total
+      const Vec pa = sub(p, a);
+      if (dot(pa, pa) <= total * total) continue;
+      if (!have_triangle) {
+        b = output_corner(hint, 1);
+        c = output_corner(hint, 2);
+        have_triangle = true;
+      }
+      total = std::max(total, point_triangle_distance(p, a, b, c));
+    }
+  }
+  if (!unhinted.empty()) total = bvh_bound(input, output, unhinted, total);
   return total * (1.0 + 1e-6);
+}
+
+double hausdorff_upper_bound(const NodeMesh& input, const NodeMesh& output) {
+  return hausdorff_upper_bound(input, output, {});
 }
 
 }  // namespace octolod::bake

@@ -69,10 +69,50 @@ void symmetric_eigen(int m, Matrix& a, Vector& values, Matrix& vectors) {
   for (int i = 0; i < m; ++i) values[static_cast<std::size_t>(i)] = at(i, i);
 }
 
+// Solves M x = rhs by an LDL^T factorization (M symmetric m x m, row-major, stride
+// kMaxQuadricDim) when every pivot exceeds kPseudoInverseThreshold times the largest diagonal
+// entry, i.e. when M is comfortably full rank; false (x untouched) otherwise. The fast path of
+// solve_nearest: the attribute blocks of generalized quadrics are nearly always well
+// conditioned, and a factorization costs a small fraction of an eigen-decomposition.
+bool solve_well_conditioned(int m, const Matrix& mat, const double* rhs, double* x) {
+  constexpr int s = kMaxQuadricDim;
+  double largest = 0.0;
+  for (int i = 0; i < m; ++i) largest = std::max(largest, mat[static_cast<std::size_t>(i * s + i)]);
+  if (!(largest > 0.0)) return false;
+  const double threshold = kPseudoInverseThreshold * largest;
+  Matrix l{};  // unit lower triangle below the diagonal, D on the diagonal
+  auto at = [&l](int i, int j) -> double& { return l[static_cast<std::size_t>(i * s + j)]; };
+  for (int j = 0; j < m; ++j) {
+    double d = mat[static_cast<std::size_t>(j * s + j)];
+    for (int k = 0; k < j; ++k) d -= at(j, k) * at(j, k) * at(k, k);
+    if (!(d > threshold)) return false;
+    at(j, j) = d;
+    for (int i = j + 1; i < m; ++i) {
+      double v = mat[static_cast<std::size_t>(i * s + j)];
+      for (int k = 0; k < j; ++k) v -= at(i, k) * at(j, k) * at(k, k);
+      at(i, j) = v / d;
+    }
+  }
+  Vector y{};
+  for (int i = 0; i < m; ++i) {  // L y = rhs
+    double v = rhs[i];
+    for (int k = 0; k < i; ++k) v -= at(i, k) * y[static_cast<std::size_t>(k)];
+    y[static_cast<std::size_t>(i)] = v;
+  }
+  for (int i = 0; i < m; ++i) y[static_cast<std::size_t>(i)] /= at(i, i);  // D z = y
+  for (int i = m; i-- > 0;) {  // L^T x = z
+    double v = y[static_cast<std::size_t>(i)];
+    for (int k = i + 1; k < m; ++k) v -= at(k, i) * x[k];
+    x[i] = v;
+  }
+  return true;
+}
+
 // x = x0 + M^+ (rhs - M x0) for the symmetric m x m matrix M (row-major, stride
 // kMaxQuadricDim, destroyed): the solution of M x = rhs (least squares) nearest x0.
 void solve_nearest(int m, Matrix& mat, const double* rhs, const double* x0, double* x) {
   constexpr int s = kMaxQuadricDim;
+  if (solve_well_conditioned(m, mat, rhs, x)) return;
   Vector residual{};
   for (int i = 0; i < m; ++i) {
     double r = rhs[i];

@@ -47,7 +47,9 @@ double evaluate_quadric(int n, const double* q, const double* v);
 inline constexpr double kPseudoInverseThreshold = 1e-3;
 
 // The minimizer of Q nearest to `mean` (both R^n): v = mean + A^+ (-b - A mean), A^+ the
-// pseudo-inverse from a symmetric eigen-decomposition with kPseudoInverseThreshold. Exactly
+// pseudo-inverse from a symmetric eigen-decomposition with kPseudoInverseThreshold (or, when
+// every LDL^T pivot of A exceeds that threshold times A's largest diagonal entry, the unique
+// minimizer by the factorization, several times cheaper). Exactly
 // `mean` when A is zero (no triangles).
 void minimize_quadric(int n, const double* q, const double* mean, double* v);
 

@@ -3,6 +3,7 @@
 // result (seed 3.5.3).
 #include <cmath>
 #include <string>
+#include <utility>
 
 #include "cluster.h"
 #include "error_bound.h"
@@ -63,7 +64,10 @@ Result<SimplifyResult> simplify_node(const NodeMesh& input, const Bounds& cell,
     const std::uint32_t g = options.target_triangles > 0
                                 ? choose_grid_resolution(node, options.target_triangles)
                                 : options.grid_resolution;
-    result.mesh = cluster_grid(node, g);
+    ClusteredMesh clustered = cluster_grid(node, g);
+    result.mesh = std::move(clustered.mesh);
+    result.error_bound = hausdorff_upper_bound(node.mesh, result.mesh, clustered.nearby_output_triangle);
+    return result;
   }
   result.error_bound = hausdorff_upper_bound(node.mesh, result.mesh);
   return result;

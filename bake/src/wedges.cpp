@@ -6,39 +6,12 @@
 #include <cmath>
 #include <cstring>
 #include <numeric>
-#include <unordered_map>
 
+#include "flat_hash.h"
 #include "quadric.h"
 
 namespace octolod::bake {
 namespace {
-
-std::uint64_t mix(std::uint64_t h, std::uint64_t v) {
-  h ^= v + 0x9E3779B97F4A7C15ull + (h << 6) + (h >> 2);
-  h *= 0xFF51AFD7ED558CCDull;
-  return h ^ (h >> 29);
-}
-
-struct RecordHash {
-  const float* base;
-  std::size_t stride;
-  std::size_t operator()(std::uint32_t v) const {
-    std::uint64_t h = 0;
-    for (std::size_t i = 0; i < stride; ++i) {
-      std::uint32_t bits;
-      std::memcpy(&bits, base + v * stride + i, 4);
-      h = mix(h, bits);
-    }
-    return static_cast<std::size_t>(h);
-  }
-};
-struct RecordEqual {
-  const float* base;
-  std::size_t stride;
-  bool operator()(std::uint32_t a, std::uint32_t b) const {
-    return std::memcmp(base + a * stride, base + b * stride, stride * 4) == 0;
-  }
-};
 
 std::uint32_t find_root(std::vector<std::uint32_t>& parent, std::uint32_t v) {
   while (parent[v] != v) {
@@ -47,16 +20,6 @@ std::uint32_t find_root(std::vector<std::uint32_t>& parent, std::uint32_t v) {
   }
   return v;
 }
-
-struct Triple {
-  std::uint32_t c[3];
-  friend bool operator==(const Triple&, const Triple&) = default;
-};
-struct TripleHash {
-  std::size_t operator()(const Triple& t) const {
-    return static_cast<std::size_t>(mix(mix(mix(0, t.c[0]), t.c[1]), t.c[2]));
-  }
-};
 
 // One candidate output triangle: the sources that map onto one cluster triple.
 struct Candidate {
@@ -69,25 +32,80 @@ std::array<double, 3> cross(const std::array<double, 3>& a, const std::array<dou
   return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
 }
 
+// Per input triangle, an output triangle near its image under the clustering (for the error
+// bound): the image itself when it survived; else an output triangle on one of the image's
+// edges (a triangle collapsed to a segment); else one at one of its clusters (collapsed to a
+// point); else kNoTriangle (the image's neighbourhood cancelled entirely).
+std::vector<std::uint32_t> nearby_output_triangles(const NodeMesh& mesh, const std::vector<std::uint32_t>& cluster,
+                                                   std::uint32_t cluster_count,
+                                                   const std::vector<std::uint32_t>& kept_cluster,
+                                                   const std::vector<std::uint32_t>& candidate_of_triangle,
+                                                   const std::vector<std::uint32_t>& output_of_candidate) {
+  const std::size_t triangle_count = mesh.triangle_count();
+  std::vector<std::uint32_t> nearby(triangle_count, kNoTriangle);
+  bool pending = false;
+  for (std::size_t t = 0; t < triangle_count; ++t) {
+    const std::uint32_t candidate = candidate_of_triangle[t];
+    if (candidate != kNoTriangle) nearby[t] = output_of_candidate[candidate];
+    pending = pending || nearby[t] == kNoTriangle;
+  }
+  if (!pending || kept_cluster.empty()) return nearby;
+
+  FlatHashMap<2> edge_triangle(kept_cluster.size());
+  std::vector<std::uint32_t> cluster_triangle(cluster_count, kNoTriangle);
+  for (std::size_t o = 0; o < kept_cluster.size() / 3; ++o) {
+    for (std::size_t k = 0; k < 3; ++k) {
+      const std::uint32_t a = kept_cluster[3 * o + k], b = kept_cluster[3 * o + (k + 1) % 3];
+      bool inserted = false;
+      edge_triangle.find_or_insert({std::min(a, b), std::max(a, b)}, static_cast<std::uint32_t>(o), inserted);
+      if (cluster_triangle[a] == kNoTriangle) cluster_triangle[a] = static_cast<std::uint32_t>(o);
+    }
+  }
+  for (std::size_t t = 0; t < triangle_count; ++t) {
+    if (nearby[t] != kNoTriangle) continue;
+    const std::uint32_t c[3] = {cluster[mesh.indices[3 * t]], cluster[mesh.indices[3 * t + 1]],
+                                cluster[mesh.indices[3 * t + 2]]};
+    for (std::size_t k = 0; k < 3 && nearby[t] == kNoTriangle; ++k) {
+      const std::uint32_t a = c[k], b = c[(k + 1) % 3];
+      if (a != b) nearby[t] = edge_triangle.find({std::min(a, b), std::max(a, b)});
+    }
+    for (std::size_t k = 0; k < 3 && nearby[t] == kNoTriangle; ++k) nearby[t] = cluster_triangle[c[k]];
+  }
+  return nearby;
+}
+
 }  // namespace
 
 NodeMesh weld_identical_vertices(const NodeMesh& mesh) {
   const std::size_t stride = mesh.layout.floats();
   const std::size_t vertex_count = mesh.vertex_count();
+  const float* base = mesh.vertices.data();
   NodeMesh out;
   out.layout = mesh.layout;
+  out.vertices.reserve(mesh.vertices.size());
   std::vector<std::uint32_t> remap(vertex_count);
-  std::unordered_map<std::uint32_t, std::uint32_t, RecordHash, RecordEqual> table(
-      vertex_count, RecordHash{mesh.vertices.data(), stride}, RecordEqual{mesh.vertices.data(), stride});
-  std::uint32_t next = 0;
-  for (std::size_t v = 0; v < vertex_count; ++v) {
-    const auto [it, inserted] = table.try_emplace(static_cast<std::uint32_t>(v), next);
-    if (inserted) {
-      out.vertices.insert(out.vertices.end(), mesh.vertices.begin() + static_cast<std::ptrdiff_t>(v * stride),
-                          mesh.vertices.begin() + static_cast<std::ptrdiff_t>((v + 1) * stride));
-      ++next;
+  FlatIdSet table(vertex_count);
+  auto hash = [base, stride](std::uint32_t v) {
+    std::uint64_t h = 0;
+    for (std::size_t i = 0; i < stride; ++i) {
+      std::uint32_t bits;
+      std::memcpy(&bits, base + v * stride + i, 4);
+      h = hash_mix(h, bits);
     }
-    remap[v] = it->second;
+    return h;
+  };
+  auto equal = [base, stride](std::uint32_t a, std::uint32_t b) {
+    return std::memcmp(base + a * stride, base + b * stride, stride * 4) == 0;
+  };
+  std::uint32_t next = 0;
+  for (std::uint32_t v = 0; v < vertex_count; ++v) {
+    const std::uint32_t first = table.find_or_insert(v, hash, equal);
+    if (first == v) {
+      out.vertices.insert(out.vertices.end(), base + v * stride, base + (v + 1) * stride);
+      remap[v] = next++;
+    } else {
+      remap[v] = remap[first];
+    }
   }
   out.indices.resize(mesh.indices.size());
   for (std::size_t i = 0; i < mesh.indices.size(); ++i) out.indices[i] = remap[mesh.indices[i]];
@@ -114,8 +132,8 @@ void finish_attributes(VertexLayout layout, const double* fallback_normal, doubl
   }
 }
 
-NodeMesh build_clustered_mesh(const NodeMesh& mesh, const Clustering& clustering,
-                              const std::array<double, 3>& origin) {
+ClusteredMesh build_clustered_mesh(const NodeMesh& mesh, const Clustering& clustering,
+                                   const std::array<double, 3>& origin) {
   const VertexLayout layout = mesh.layout;
   const int n = static_cast<int>(layout.floats());
   const int attribute_count = n - 3;
@@ -156,6 +174,25 @@ NodeMesh build_clustered_mesh(const NodeMesh& mesh, const Clustering& clustering
     for (int i = 3; i < n; ++i) out[i] = f[i];
   };
 
+  // face normals (x2 area), and the scale of positions in the generalized quadrics: 1 / typical
+  // edge length, so a triangle spans about one unit in position. Garland & Heckbert scale the
+  // model into the unit cube for the same reason: with tiny triangles the attribute directions
+  // dominate the plane in R^n and the attribute systems become nearly singular.
+  std::vector<std::array<double, 3>> face_normal(triangle_count);
+  double total_area = 0.0;
+  for (std::size_t t = 0; t < triangle_count; ++t) {
+    const float* p0 = &mesh.vertices[mesh.indices[3 * t] * stride];
+    const float* p1 = &mesh.vertices[mesh.indices[3 * t + 1] * stride];
+    const float* p2 = &mesh.vertices[mesh.indices[3 * t + 2] * stride];
+    const std::array<double, 3> e1{double(p1[0]) - p0[0], double(p1[1]) - p0[1], double(p1[2]) - p0[2]};
+    const std::array<double, 3> e2{double(p2[0]) - p0[0], double(p2[1]) - p0[1], double(p2[2]) - p0[2]};
+    face_normal[t] = cross(e1, e2);
+    const std::array<double, 3>& fn = face_normal[t];
+    total_area += 0.5 * std::sqrt(fn[0] * fn[0] + fn[1] * fn[1] + fn[2] * fn[2]);
+  }
+  const double position_scale =
+      total_area > 0.0 ? std::sqrt(static_cast<double>(triangle_count) / (2.0 * total_area)) : 1.0;
+
   // means: positions per cluster, full vectors per wedge (each vertex counted once)
   std::vector<double> cluster_sum(clustering.count * 3, 0.0);
   std::vector<std::uint32_t> cluster_vertices(clustering.count, 0);
@@ -177,22 +214,22 @@ NodeMesh build_clustered_mesh(const NodeMesh& mesh, const Clustering& clustering
   const std::size_t qn = quadric_doubles(n);
   std::vector<double> cluster_quadric(clustering.count * q3, 0.0);
   std::vector<double> wedge_quadric(attribute_count > 0 ? wedge_count * qn : 0, 0.0);
-  std::vector<std::array<double, 3>> face_normal(triangle_count);  // area-weighted (x2)
   for (std::size_t t = 0; t < triangle_count; ++t) {
     const std::uint32_t* corner = &mesh.indices[3 * t];
-    double p[3][kMaxQuadricDim];
-    for (int k = 0; k < 3; ++k) local_vertex(corner[k], p[k]);
-    const std::array<double, 3> e1{p[1][0] - p[0][0], p[1][1] - p[0][1], p[1][2] - p[0][2]};
-    const std::array<double, 3> e2{p[2][0] - p[0][0], p[2][1] - p[0][1], p[2][2] - p[0][2]};
-    face_normal[t] = cross(e1, e2);
     if (locked(corner[0]) && locked(corner[1]) && locked(corner[2])) continue;
     const std::array<double, 3>& fn = face_normal[t];
     const double area = 0.5 * std::sqrt(fn[0] * fn[0] + fn[1] * fn[1] + fn[2] * fn[2]);
     if (!(area > 0.0)) continue;
+    double p[3][kMaxQuadricDim];
+    for (int k = 0; k < 3; ++k) local_vertex(corner[k], p[k]);
     double quadric3[quadric_doubles(3)];
     double quadric_n[kMaxQuadricDoubles];
     triangle_quadric(3, p[0], p[1], p[2], area, quadric3);
-    if (attribute_count > 0) triangle_quadric(n, p[0], p[1], p[2], area, quadric_n);
+    if (attribute_count > 0) {
+      for (int k = 0; k < 3; ++k)
+        for (int i = 0; i < 3; ++i) p[k][i] *= position_scale;
+      triangle_quadric(n, p[0], p[1], p[2], area, quadric_n);
+    }
     for (int k = 0; k < 3; ++k) {
       const std::uint32_t v = corner[k];
       if (locked(v)) continue;
@@ -221,40 +258,48 @@ NodeMesh build_clustered_mesh(const NodeMesh& mesh, const Clustering& clustering
     }
     const std::uint32_t c = cluster[root];
     double v[kMaxQuadricDim];
-    for (int i = 0; i < 3; ++i) v[i] = cluster_position[c * 3 + static_cast<std::size_t>(i)];
     if (attribute_count > 0) {
+      for (int i = 0; i < 3; ++i) v[i] = cluster_position[c * 3 + static_cast<std::size_t>(i)] * position_scale;
       double mean[kMaxQuadricDim];
       for (int i = 0; i < n; ++i) mean[i] = wedge_sum[w * stride + static_cast<std::size_t>(i)] / wedge_vertices[w];
       minimize_quadric_free_tail(n, 3, &wedge_quadric[w * qn], mean + 3, v);
       finish_attributes(layout, layout.normal ? mean + 3 : nullptr, v + 3);
     }
+    for (int i = 0; i < 3; ++i) v[i] = cluster_position[c * 3 + static_cast<std::size_t>(i)];
     for (int i = 0; i < 3; ++i) record[i] = static_cast<float>(v[i] + origin[static_cast<std::size_t>(i)]);
     for (int i = 3; i < n; ++i) record[i] = static_cast<float>(v[i]);
   }
 
   // candidate triangles: sources counted per cluster triple
-  std::unordered_map<Triple, std::uint32_t, TripleHash> candidate_of;
+  FlatHashMap<3> candidate_of(triangle_count);
   std::vector<Candidate> candidates;
+  std::vector<std::uint32_t> candidate_of_triangle(triangle_count, kNoTriangle);
   for (std::size_t t = 0; t < triangle_count; ++t) {
     const std::uint32_t* corner = &mesh.indices[3 * t];
     const std::uint32_t c0 = cluster[corner[0]], c1 = cluster[corner[1]], c2 = cluster[corner[2]];
     if (c0 == c1 || c1 == c2 || c0 == c2) continue;
-    Triple sorted{{c0, c1, c2}};
-    std::sort(sorted.c, sorted.c + 3);
+    std::array<std::uint32_t, 3> sorted{c0, c1, c2};
+    std::sort(sorted.begin(), sorted.end());
     // the source's winding agrees with the sorted triple's iff it is an even permutation of it
     const bool even = (c0 < c1) + (c1 < c2) + (c2 < c0) == 2;
-    const auto [it, inserted] = candidate_of.try_emplace(sorted, static_cast<std::uint32_t>(candidates.size()));
+    bool inserted = false;
+    const std::uint32_t index =
+        candidate_of.find_or_insert(sorted, static_cast<std::uint32_t>(candidates.size()), inserted);
     if (inserted) candidates.push_back({0, static_cast<std::uint32_t>(t), {}});
-    Candidate& candidate = candidates[it->second];
+    candidate_of_triangle[t] = index;
+    Candidate& candidate = candidates[index];
     ++candidate.count;
     for (std::size_t i = 0; i < 3; ++i) candidate.normal[i] += even ? face_normal[t][i] : -face_normal[t][i];
   }
 
   // output: odd candidates, oriented like their sources, vertices compacted in wedge order
-  NodeMesh out;
+  ClusteredMesh result;
+  NodeMesh& out = result.mesh;
   out.layout = layout;
   std::vector<std::uint32_t> kept;  // wedge corners of kept triangles
-  for (const Candidate& candidate : candidates) {
+  std::vector<std::uint32_t> output_of_candidate(candidates.size(), kNoTriangle);
+  for (std::size_t ci = 0; ci < candidates.size(); ++ci) {
+    const Candidate& candidate = candidates[ci];
     if (candidate.count % 2 == 0) continue;
     const std::uint32_t* corner = &mesh.indices[3 * static_cast<std::size_t>(candidate.first_triangle)];
     std::array<std::uint32_t, 3> w{wedge[corner[0]], wedge[corner[1]], wedge[corner[2]]};
@@ -271,6 +316,7 @@ NodeMesh build_clustered_mesh(const NodeMesh& mesh, const Clustering& clustering
     const double agreement = (even ? 1.0 : -1.0) *
         (normal[0] * candidate.normal[0] + normal[1] * candidate.normal[1] + normal[2] * candidate.normal[2]);
     if (agreement < 0.0) std::swap(w[1], w[2]);
+    output_of_candidate[ci] = static_cast<std::uint32_t>(kept.size() / 3);
     kept.insert(kept.end(), w.begin(), w.end());
   }
   std::vector<std::uint32_t> output_id(wedge_count, UINT32_MAX);
@@ -284,7 +330,11 @@ NodeMesh build_clustered_mesh(const NodeMesh& mesh, const Clustering& clustering
   }
   out.indices.reserve(kept.size());
   for (std::uint32_t w : kept) out.indices.push_back(output_id[w]);
-  return out;
+  std::vector<std::uint32_t> kept_cluster(kept.size());
+  for (std::size_t i = 0; i < kept.size(); ++i) kept_cluster[i] = static_cast<std::uint32_t>(order[kept[i]] >> 32);
+  result.nearby_output_triangle = nearby_output_triangles(mesh, cluster, clustering.count, kept_cluster,
+                                                          candidate_of_triangle, output_of_candidate);
+  return result;
 }
 
 }  // namespace octolod::bake

@@ -46,8 +46,16 @@ struct Clustering {
 // dropping would open the surface). Triangles with two corners at bit-identical positions are
 // dropped (their edges cancel mod 2). Unused vertices are removed; output vertices are in
 // (cluster, smallest vertex id of the wedge) order.
-NodeMesh build_clustered_mesh(const NodeMesh& mesh, const Clustering& clustering,
-                              const std::array<double, 3>& origin);
+inline constexpr std::uint32_t kNoTriangle = 0xFFFFFFFFu;
+struct ClusteredMesh {
+  NodeMesh mesh;
+  // Per input triangle: an output triangle at or next to its image (the image itself when it
+  // survived, else one sharing an image edge, else one at an image vertex), kNoTriangle when
+  // there is none. Only a hint for hausdorff_upper_bound: any output triangle gives a valid bound.
+  std::vector<std::uint32_t> nearby_output_triangle;
+};
+ClusteredMesh build_clustered_mesh(const NodeMesh& mesh, const Clustering& clustering,
+                                   const std::array<double, 3>& origin);
 
 // Post-processing of a solved attribute vector in VertexLayout order (after the position):
 // normals renormalized (`fallback_normal` when zero), colours clamped to 0..1.

@@ -1,0 +1,143 @@
+// Benchmark of the per-node simplification (seed 3.5, 4.4, 3.5.3): build_lods (a leaf's whole
+// LOD chain with the default grid method) on generated rock and city nodes, in input triangles
+// per second, with the split of one step into clustering and the conservative Hausdorff bound.
+//
+//   cluster_bench [--repeat N] [triangles...]     default: 2000 20000 200000, repeat 3
+//
+// A node here is the whole sample (its cell = the sample's bounds) cut in half at x = centre,
+// the left half: a real octree node with a locked boundary on the cut. Best of N runs.
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <limits>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "error_bound.h"
+#include "octolod/bake/simplify.h"
+#include "octolod/formats/node_file.h"
+#include "octolod/samplegen/sample_generator.h"
+
+namespace {
+
+using namespace octolod;
+using Clock = std::chrono::steady_clock;
+
+double seconds_since(Clock::time_point start) {
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+[[noreturn]] void fail(const std::string& message) {
+  std::fprintf(stderr, "error: %s\n", message.c_str());
+  std::exit(1);
+}
+
+NodeMesh make_sample(samplegen::Shape shape, std::uint64_t triangles) {
+  samplegen::SampleSpec spec;
+  spec.shape = shape;
+  spec.triangles = triangles;
+  auto stream = samplegen::SampleStream::create(spec);
+  if (!stream.ok()) fail(stream.status().message());
+  NodeMesh mesh;
+  mesh.layout = spec.layout;
+  for (;;) {
+    const samplegen::SampleBatch batch = stream.value()->next();
+    if (batch.kind == samplegen::SampleBatch::Kind::end) break;
+    mesh.vertices.insert(mesh.vertices.end(), batch.vertices.begin(), batch.vertices.end());
+    mesh.indices.insert(mesh.indices.end(), batch.triangles.begin(), batch.triangles.end());
+  }
+  return mesh;
+}
+
+// The triangles whose centroid has x < split (vertices compacted), and its cell.
+struct Node {
+  NodeMesh mesh;
+  Bounds cell;
+};
+Node left_half(const NodeMesh& mesh) {
+  const Bounds bounds = mesh.bounds();
+  const float split = 0.5f * (bounds.min[0] + bounds.max[0]);
+  const std::size_t stride = mesh.layout.floats();
+  Node node;
+  node.cell = bounds;
+  node.cell.max[0] = split;
+  node.mesh.layout = mesh.layout;
+  std::vector<std::uint32_t> remap(mesh.vertex_count(), std::numeric_limits<std::uint32_t>::max());
+  for (std::size_t t = 0; t < mesh.triangle_count(); ++t) {
+    float x = 0.0f;
+    for (int k = 0; k < 3; ++k) x += mesh.vertices[mesh.indices[3 * t + static_cast<std::size_t>(k)] * stride];
+    if (x / 3.0f >= split) continue;
+    for (int k = 0; k < 3; ++k) {
+      const std::uint32_t v = mesh.indices[3 * t + static_cast<std::size_t>(k)];
+      if (remap[v] == std::numeric_limits<std::uint32_t>::max()) {
+        remap[v] = static_cast<std::uint32_t>(node.mesh.vertex_count());
+        node.mesh.vertices.insert(node.mesh.vertices.end(), mesh.vertices.begin() + static_cast<std::ptrdiff_t>(v * stride),
+                                  mesh.vertices.begin() + static_cast<std::ptrdiff_t>((v + 1) * stride));
+      }
+      node.mesh.indices.push_back(remap[v]);
+    }
+  }
+  return node;
+}
+
+void run(samplegen::Shape shape, std::uint64_t triangles, int repeat) {
+  const Node node = left_half(make_sample(shape, triangles));
+  const double input = static_cast<double>(node.mesh.triangle_count());
+
+  double chain_best = std::numeric_limits<double>::infinity();
+  std::vector<bake::Lod> lods;
+  for (int r = 0; r < repeat; ++r) {
+    const auto start = Clock::now();
+    auto result = bake::build_lods(node.mesh, 0.0, node.cell, {});
+    chain_best = std::min(chain_best, seconds_since(start));
+    if (!result.ok()) fail(result.status().message());
+    lods = std::move(result.value());
+  }
+
+  // one step (input -> half), and the error bound of that step alone
+  bake::SimplifyOptions step;
+  step.target_triangles = static_cast<std::uint32_t>(node.mesh.triangle_count() / 2);
+  double step_best = std::numeric_limits<double>::infinity();
+  double bound_best = std::numeric_limits<double>::infinity();
+  bake::SimplifyResult simplified;
+  for (int r = 0; r < repeat; ++r) {
+    const auto start = Clock::now();
+    auto result = bake::simplify_node(node.mesh, node.cell, step);
+    step_best = std::min(step_best, seconds_since(start));
+    if (!result.ok()) fail(result.status().message());
+    simplified = std::move(result.value());
+    const auto bound_start = Clock::now();
+    const double bound = bake::hausdorff_upper_bound(node.mesh, simplified.mesh);
+    bound_best = std::min(bound_best, seconds_since(bound_start));
+    if (bound < 0.0) fail("negative bound");
+  }
+
+  std::printf("%-5s %8.0f tris  chain: %2zu LODs (last %6zu tris) %8.2f ms  %6.2f M tris/s | "
+              "step 1/2: %7.2f ms %6.2f M tris/s | BVH bound alone: %7.2f ms\n",
+              std::string(samplegen::to_string(shape)).c_str(), input, lods.size(),
+              lods.back().mesh.triangle_count(), chain_best * 1e3, input / chain_best / 1e6,
+              step_best * 1e3, input / step_best / 1e6, bound_best * 1e3);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  int repeat = 3;
+  std::vector<std::uint64_t> sizes;
+  for (int i = 1; i < argc; ++i) {
+    const std::string_view arg = argv[i];
+    if (arg == "--repeat" && i + 1 < argc) {
+      repeat = std::max(1, std::atoi(argv[++i]));
+      continue;
+    }
+    auto count = samplegen::parse_triangle_count(arg);
+    if (!count.ok()) fail(count.status().message());
+    sizes.push_back(count.value());
+  }
+  if (sizes.empty()) sizes = {2'000, 20'000, 200'000};
+  for (const samplegen::Shape shape : {samplegen::Shape::rock, samplegen::Shape::city})
+    for (const std::uint64_t size : sizes) run(shape, size, repeat);
+  return 0;
+}
