@@ -4,6 +4,8 @@
 
 #include <cmath>
 #include <cstdint>
+#include <map>
+#include <utility>
 #include <random>
 #include <vector>
 
@@ -11,7 +13,9 @@
 
 #include "octolod/formats/node_file.h"
 #include "octolod/measure/metro.h"
+#include "octolod/measure/reference.h"
 #include "octolod/measure/triangle_bvh.h"
+#include "octolod/samplegen/sample_generator.h"
 
 namespace octolod::measure {
 namespace {
@@ -44,7 +48,8 @@ NodeMesh plane_mesh(VertexLayout layout, int cells, float size, float height) {
 }
 
 // Latitude/longitude sphere of `radius` around the origin: `rings` latitude bands, `segments`
-// longitudes; shared vertices, seam duplicated (u = 0 and u = 1), outward normals, colour from
+// longitudes; shared vertices, seam and poles duplicated (u = 0 and u = 1 at bit-identical
+// positions), outward normals, colour from
 // the normal, spherical uv. 2 * segments * (rings - 1) triangles.
 NodeMesh sphere_mesh(VertexLayout layout, int rings, int segments, float radius) {
   NodeMesh m;
@@ -52,8 +57,11 @@ NodeMesh sphere_mesh(VertexLayout layout, int rings, int segments, float radius)
   for (int r = 0; r <= rings; ++r)
     for (int s = 0; s <= segments; ++s) {
       float theta = kPi * static_cast<float>(r) / static_cast<float>(rings);
-      float phi = 2.0f * kPi * static_cast<float>(s) / static_cast<float>(segments);
-      glm::vec3 n(std::sin(theta) * std::cos(phi), std::cos(theta), std::sin(theta) * std::sin(phi));
+      // the seam column repeats column 0 exactly, the pole rows collapse to one exact point
+      float phi = 2.0f * kPi * static_cast<float>(s % segments) / static_cast<float>(segments);
+      float ring = (r == 0 || r == rings) ? 0.0f : std::sin(theta);
+      float height = r == 0 ? 1.0f : (r == rings ? -1.0f : std::cos(theta));
+      glm::vec3 n(ring * std::cos(phi), height, ring * std::sin(phi));
       m.vertices.insert(m.vertices.end(), {radius * n.x, radius * n.y, radius * n.z});
       if (layout.normal) m.vertices.insert(m.vertices.end(), {n.x, n.y, n.z});
       if (layout.color)
@@ -356,6 +364,151 @@ TEST(Metro, RejectsBadMeshes) {
   NodeMesh nan = good;
   nan.vertices[1] = std::nanf("");
   EXPECT_EQ(evaluate(nan, good).status().code(), ErrorCode::bad_input);
+}
+
+// Reference simplification ----------------------------------------------------------------------
+
+TEST(Reference, SphereReachesTargetWithSmallError) {
+  // ~20K triangles with a uv seam (duplicated vertices at longitude 0): welding must let the
+  // decimater collapse across it
+  NodeMesh sphere = sphere_mesh({true, true, true}, 100, 100, 1.0f);
+  ASSERT_EQ(sphere.triangle_count(), 19'800u);
+  ReferenceStats stats;
+  Result<NodeMesh> r = reference_simplify(sphere, 2000, &stats);
+  ASSERT_TRUE(r.ok()) << r.status().message();
+  EXPECT_NEAR(static_cast<double>(r->triangle_count()), 2000.0, 20.0);
+  EXPECT_EQ(stats.output_triangles, r->triangle_count());
+  EXPECT_EQ(stats.input_triangles, 19'800u);
+  EXPECT_EQ(stats.welded_vertices, 99u * 100u + 2u);  // seam and poles welded
+  EXPECT_EQ(stats.detached_triangles, 0u);
+  EXPECT_EQ(r->layout, sphere.layout);
+  // every vertex is used
+  std::vector<bool> used(r->vertex_count());
+  for (std::uint32_t i : r->indices) used[i] = true;
+  EXPECT_EQ(std::count(used.begin(), used.end(), false), 0);
+
+  Result<MetroReport> m = evaluate(sphere, r.value(), small_options(50'000));
+  ASSERT_TRUE(m.ok());
+  // 2000 triangles on a unit sphere (area 4 pi): equilateral ones would have edges ~0.12 and a
+  // largest chord sag (circumradius^2 / 2) of ~0.0024; the mean sag over such a triangle is about
+  // half that. Greedy collapses leave a less even triangulation, hence the margins.
+  EXPECT_LT(m->two_sided.max, 0.01);
+  EXPECT_LT(m->two_sided.mean, 0.003);
+  // attributes follow the surface: normals within a few degrees, colours (from the normal)
+  EXPECT_LT(m->two_sided.normal_mean_degrees, 3.0);
+  EXPECT_LT(m->two_sided.color_rms, 0.02);
+  for (std::size_t v = 0; v < r->vertex_count(); ++v) {
+    const float* n = r->vertices.data() + v * r->layout.floats() + 3;
+    ASSERT_NEAR(std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]), 1.0f, 1e-5f);
+  }
+}
+
+// Every triangle edge of a closed 2-manifold is used exactly twice, in opposite directions.
+std::size_t open_edges(const NodeMesh& m) {
+  std::map<std::pair<std::uint32_t, std::uint32_t>, int> directed;
+  for (std::size_t t = 0; t < m.triangle_count(); ++t)
+    for (std::size_t c = 0; c < 3; ++c)
+      ++directed[{m.indices[3 * t + c], m.indices[3 * t + (c + 1) % 3]}];
+  std::size_t open = 0;
+  for (const auto& [edge, count] : directed) {
+    auto twin = directed.find({edge.second, edge.first});
+    if (count != 1 || twin == directed.end() || twin->second != 1) ++open;
+  }
+  return open;
+}
+
+NodeMesh rock_mesh(std::uint64_t triangles) {
+  samplegen::SampleSpec spec;
+  spec.shape = samplegen::Shape::rock;
+  spec.triangles = triangles;
+  auto stream = samplegen::SampleStream::create(spec);
+  EXPECT_TRUE(stream.ok());
+  NodeMesh mesh;
+  mesh.layout = spec.layout;
+  for (;;) {
+    samplegen::SampleBatch batch = stream.value()->next();
+    if (batch.kind == samplegen::SampleBatch::Kind::end) break;
+    mesh.vertices.insert(mesh.vertices.end(), batch.vertices.begin(), batch.vertices.end());
+    mesh.indices.insert(mesh.indices.end(), batch.triangles.begin(), batch.triangles.end());
+  }
+  return mesh;
+}
+
+TEST(Reference, ClosedRockReachesEveryTargetAndStaysClosed) {
+  // the rock's uv seam duplicates positions; welded, it is a closed 2-manifold, so every
+  // target is reachable (a collapse removes two triangles: the target or one below it)
+  const NodeMesh rock = rock_mesh(20'000);
+  for (std::uint32_t target : {5'000u, 1'001u, 300u}) {
+    ReferenceStats stats;
+    Result<NodeMesh> r = reference_simplify(rock, target, &stats);
+    ASSERT_TRUE(r.ok()) << r.status().message();
+    EXPECT_LE(r->triangle_count(), target);
+    EXPECT_GE(r->triangle_count() + 2, target);
+    EXPECT_EQ(stats.detached_triangles, 0u);
+    EXPECT_EQ(open_edges(r.value()), 0u) << target;
+    // no degenerate triangle
+    for (std::size_t t = 0; t < r->triangle_count(); ++t) {
+      const std::uint32_t* c = r->indices.data() + 3 * t;
+      EXPECT_TRUE(c[0] != c[1] && c[1] != c[2] && c[2] != c[0]);
+    }
+  }
+}
+
+TEST(Reference, LadderMatchesSingleTargetsAndKeepsTheirOrder) {
+  const NodeMesh rock = rock_mesh(8'000);
+  const std::uint32_t targets[] = {400, 2'000, 1'000, 2'000};
+  ReferenceStats stats;
+  Result<std::vector<NodeMesh>> ladder = reference_simplify_ladder(rock, targets, &stats);
+  ASSERT_TRUE(ladder.ok()) << ladder.status().message();
+  ASSERT_EQ(ladder->size(), 4u);
+  EXPECT_EQ(ladder.value()[1], ladder.value()[3]);
+  EXPECT_EQ(stats.output_triangles, ladder.value()[0].triangle_count());
+  // the first snapshot is what a single run produces; later ones continue the same decimation
+  Result<NodeMesh> single = reference_simplify(rock, 2'000);
+  ASSERT_TRUE(single.ok());
+  EXPECT_EQ(ladder.value()[1], single.value());
+  for (std::size_t i = 0; i < 3; ++i) {
+    EXPECT_LE(ladder.value()[i].triangle_count(), targets[i]);
+    EXPECT_GE(ladder.value()[i].triangle_count() + 2, targets[i]);
+  }
+  Result<NodeMesh> small = reference_simplify(rock, 400);
+  ASSERT_TRUE(small.ok());
+  Result<MetroReport> a = evaluate(rock, ladder.value()[0], small_options(20'000));
+  Result<MetroReport> b = evaluate(rock, small.value(), small_options(20'000));
+  ASSERT_TRUE(a.ok() && b.ok());
+  EXPECT_NEAR(a->two_sided.rms, b->two_sided.rms, 0.1 * b->two_sided.rms);
+  EXPECT_EQ(reference_simplify_ladder(rock, {}).status().code(), ErrorCode::usage);
+}
+
+TEST(Reference, TargetAboveInputReturnsWeldedMesh) {
+  NodeMesh plane = plane_mesh({false, true, false}, 3, 1.0f, 0.0f);
+  Result<NodeMesh> r = reference_simplify(plane, 1000);
+  ASSERT_TRUE(r.ok());
+  EXPECT_EQ(r->triangle_count(), plane.triangle_count());
+  EXPECT_EQ(r->vertex_count(), plane.vertex_count());
+  Result<MetroReport> m = evaluate(plane, r.value(), small_options(5000));
+  ASSERT_TRUE(m.ok());
+  EXPECT_LT(m->two_sided.max, 1e-6);
+  EXPECT_LT(m->two_sided.color_rms, 1e-6);
+}
+
+TEST(Reference, NonManifoldTrianglesAreKeptDetached) {
+  // three triangles on one edge (0,1): the third cannot join the half-edge mesh
+  NodeMesh m;
+  m.vertices = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, -1, 0, 0, 0, 1};
+  m.indices = {0, 1, 2, 1, 0, 3, 0, 1, 4};
+  ReferenceStats stats;
+  Result<NodeMesh> r = reference_simplify(m, 100, &stats);
+  ASSERT_TRUE(r.ok());
+  EXPECT_EQ(stats.detached_triangles, 1u);
+  EXPECT_EQ(r->triangle_count(), 3u);
+}
+
+TEST(Reference, RejectsBadInput) {
+  NodeMesh plane = plane_mesh({}, 2, 1.0f, 0.0f);
+  EXPECT_EQ(reference_simplify(plane, 0).status().code(), ErrorCode::usage);
+  plane.indices.back() = 99;
+  EXPECT_EQ(reference_simplify(plane, 4).status().code(), ErrorCode::bad_input);
 }
 
 }  // namespace

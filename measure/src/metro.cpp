@@ -17,13 +17,13 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
-#include <string>
-#include <string_view>
 #include <thread>
 #include <vector>
 
+#include <glm/ext/vector_double3.hpp>
 #include <glm/geometric.hpp>
 
+#include "mesh_check.h"
 #include "octolod/measure/triangle_bvh.h"
 
 namespace octolod::measure {
@@ -45,30 +45,6 @@ std::uint64_t mix64(std::uint64_t x) {
 // Uniform in [0, 1) from (key, counter).
 double uniform01(std::uint64_t key, std::uint64_t counter) {
   return static_cast<double>(mix64(key ^ mix64(counter)) >> 11) * 0x1.0p-53;
-}
-
-Status validate(const NodeMesh& mesh, std::string_view name) {
-  const std::uint32_t stride = mesh.layout.floats();
-  if (mesh.vertices.size() % stride != 0)
-    return bad_input_error(std::string(name) + ": " + std::to_string(mesh.vertices.size()) +
-                           " vertex floats are not a multiple of the layout (" +
-                           mesh.layout.describe() + ", " + std::to_string(stride) + " floats)");
-  if (mesh.indices.size() % 3 != 0)
-    return bad_input_error(std::string(name) + ": " + std::to_string(mesh.indices.size()) +
-                           " indices are not a multiple of 3");
-  if (mesh.indices.empty()) return bad_input_error(std::string(name) + ": the mesh has no triangles");
-  const std::size_t vertex_count = mesh.vertex_count();
-  for (std::size_t i = 0; i < mesh.indices.size(); ++i)
-    if (mesh.indices[i] >= vertex_count)
-      return bad_input_error(std::string(name) + ": index " + std::to_string(i) + " is " +
-                             std::to_string(mesh.indices[i]) + ", but there are only " +
-                             std::to_string(vertex_count) + " vertices");
-  for (std::size_t v = 0; v < vertex_count; ++v)
-    for (std::size_t k = 0; k < 3; ++k)
-      if (!std::isfinite(mesh.vertices[v * stride + k]))
-        return bad_input_error(std::string(name) + ": vertex " + std::to_string(v) +
-                               " has a non-finite coordinate");
-  return {};
 }
 
 // One mesh, ready to be sampled (cumulative areas) and queried (hierarchy).
@@ -182,10 +158,12 @@ Partial sample_range(const Direction& dir, VertexLayout compared, std::uint64_t 
     if (compared.normal) {
       glm::vec3 na = from.interpolate(t, bary, VertexLayout::normal_offset(), 3);
       glm::vec3 nb = to.interpolate(hit.triangle, hit.barycentric, VertexLayout::normal_offset(), 3);
-      float la = glm::length(na), lb = glm::length(nb);
-      if (la > 0.0f && lb > 0.0f) {
-        double cosine = std::clamp(static_cast<double>(glm::dot(na, nb)) / (double{la} * lb), -1.0, 1.0);
-        double degrees = std::acos(cosine) * kDegreesPerRadian;
+      if (glm::length(na) > 0.0f && glm::length(nb) > 0.0f) {
+        // atan2(|a x b|, a . b) needs no normalization and, unlike acos of the cosine, stays
+        // accurate near 0 degrees (parallel normals give exactly 0)
+        const glm::dvec3 a(na), b(nb);
+        const double degrees =
+            std::atan2(glm::length(glm::cross(a, b)), glm::dot(a, b)) * kDegreesPerRadian;
         ++out.normal_samples;
         out.normal_sum += degrees;
         out.normal_max = std::max(out.normal_max, degrees);
@@ -236,8 +214,10 @@ std::uint64_t sample_count(const MetroOptions& options, const NodeMesh& from) {
 
 Result<MetroReport> evaluate(const NodeMesh& a, const NodeMesh& b, const MetroOptions& options) {
   const auto start = std::chrono::steady_clock::now();
-  OCTOLOD_RETURN_IF_ERROR(validate(a, "mesh a"));
-  OCTOLOD_RETURN_IF_ERROR(validate(b, "mesh b"));
+  OCTOLOD_RETURN_IF_ERROR(check_mesh(a, "mesh a"));
+  OCTOLOD_RETURN_IF_ERROR(check_mesh(b, "mesh b"));
+  if (a.indices.empty()) return bad_input_error("mesh a: the mesh has no triangles");
+  if (b.indices.empty()) return bad_input_error("mesh b: the mesh has no triangles");
 
   MetroReport report;
   report.threads = options.threads ? options.threads : std::max(1u, std::thread::hardware_concurrency());
