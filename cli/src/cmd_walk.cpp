@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <memory>
 #include <string>
@@ -14,10 +15,12 @@
 #include <glm/glm.hpp>
 
 #include "command.h"
+#include "frame_render.h"
 #include "image.h"
 #include "line_chart.h"
 #include "octolod/formats/manifest.h"
 #include "octolod/runtime/streaming_tree.h"
+#include "view_camera.h"
 
 namespace octolod::cli {
 namespace {
@@ -34,11 +37,15 @@ struct WalkArgs {
   bool no_prefetch = false;
   std::string csv;
   std::string plot;
+  std::string frames_png;
+  std::uint32_t frames_png_every = 100;
 };
 
-constexpr float kFovyRadians = 1.0471976f;  // 60 degrees
-constexpr float kAspect = 16.0f / 9.0f;
-constexpr float kViewportHeight = 1080.0f;
+// Selection runs for a 1920x1080 view with a 60 degree vertical field of view; --frames-png
+// pictures are rendered at half that size with the same projection.
+constexpr Lens kLens{1.0471976f, 1920, 1080};
+constexpr int kFrameWidth = 960;
+constexpr int kFrameHeight = 540;
 
 struct Key {
   glm::vec3 eye;
@@ -70,10 +77,9 @@ Result<std::vector<Key>> read_keyframes(const std::string& file) {
 // (half the diagonal).
 Result<std::vector<runtime::Camera>> camera_path(const std::string& kind, const Bounds& bounds,
                                                  std::uint32_t frames) {
-  const glm::vec3 lo(bounds.min[0], bounds.min[1], bounds.min[2]);
-  const glm::vec3 hi(bounds.max[0], bounds.max[1], bounds.max[2]);
-  const glm::vec3 c = 0.5f * (lo + hi);
-  const float r = std::max(0.5f * glm::length(hi - lo), 1e-6f);
+  const ModelSphere sphere = model_sphere(bounds);
+  const glm::vec3 c = sphere.center;
+  const float r = sphere.radius;
   std::vector<Key> keys;
   std::vector<Key> per_frame;
   auto t_of = [&](std::uint32_t i) {
@@ -109,10 +115,9 @@ Result<std::vector<runtime::Camera>> camera_path(const std::string& kind, const 
   }
   std::vector<runtime::Camera> cameras;
   for (const Key& k : per_frame) {
-    const glm::vec3 forward = k.target - k.eye;
-    const glm::vec3 up = std::abs(glm::normalize(forward).y) > 0.99f ? glm::vec3(0, 0, 1) : glm::vec3(0, 1, 0);
-    cameras.push_back(runtime::make_perspective_camera(k.eye, k.target, up, kFovyRadians, kAspect,
-                                                       1e-3f * r, 100.0f * r, kViewportHeight));
+    if (!(glm::length(k.target - k.eye) > 0.0f))
+      return bad_input_error(kind + ": a keyframe's eye and target coincide");
+    cameras.push_back(look_at_camera(k.eye, k.target, kLens, 1e-3f * r, 100.0f * r));
   }
   return cameras;
 }
@@ -137,6 +142,12 @@ int run_walk(const WalkArgs& args, const CommandContext& context) {
   if (args.frames == 0) return report(usage_error("--frames must be at least 1"));
   if (!(args.fps >= 0.0)) return report(usage_error("--fps must be >= 0 (0: as fast as possible)"));
   if (args.threads == 0) return report(usage_error("--threads must be at least 1"));
+  if (args.frames_png_every == 0) return report(usage_error("--frames-png-every must be at least 1"));
+  if (!args.frames_png.empty()) {
+    std::error_code error;
+    std::filesystem::create_directories(args.frames_png, error);
+    if (error) return report(io_error(args.frames_png + ": cannot create directory: " + error.message()));
+  }
 
   runtime::StreamingOptions options;
   options.max_resident_bytes = budget.value();
@@ -163,19 +174,39 @@ int run_walk(const WalkArgs& args, const CommandContext& context) {
            "second_chance_hits,fallbacks,holes,coarsening,selection_ms\n";
   }
 
-  // replay at a fixed frame rate: loads progress on the loader threads between frames
+  // replay at a fixed frame rate: loads progress on the loader threads between frames. Rendering
+  // a --frames-png picture pauses the replay clock (the loaders keep running meanwhile, so those
+  // frames see more loads completed than a real-time renderer would).
+  const FramePainter painter(tree.manifest());
   std::vector<runtime::FrameStats> stats;
   stats.reserve(args.frames);
-  const auto start = std::chrono::steady_clock::now();
+  std::uint32_t pictures = 0;
+  auto start = std::chrono::steady_clock::now();
+  std::chrono::steady_clock::duration paused{};
   for (std::uint32_t i = 0; i < args.frames; ++i) {
     if (args.fps > 0) {
       std::this_thread::sleep_until(start + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
                                                 std::chrono::duration<double>(i / args.fps)));
     }
-    stats.push_back(tree.update(cameras.value()[i]).stats);
+    const runtime::FrameResult& frame = tree.update(cameras.value()[i]);
+    stats.push_back(frame.stats);
     if (csv.is_open()) write_csv_row(csv, i, stats.back());
+    if (!args.frames_png.empty() && i % args.frames_png_every == 0) {
+      const auto render_start = std::chrono::steady_clock::now();
+      Result<Image> image = painter.paint(frame, cameras.value()[i], kFrameWidth, kFrameHeight);
+      if (!image.ok()) return report(image.status());
+      char name[32];
+      std::snprintf(name, sizeof name, "frame_%06u.png", static_cast<unsigned>(i));
+      const Status written = write_png(std::filesystem::path(args.frames_png) / name, image.value());
+      if (!written.ok()) return report(written);
+      ++pictures;
+      const auto render_time = std::chrono::steady_clock::now() - render_start;
+      start += render_time;
+      paused += render_time;
+    }
   }
-  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   if (csv.is_open() && !csv.flush()) return report(io_error(args.csv + ": write failed"));
 
   // summary
@@ -230,7 +261,9 @@ int run_walk(const WalkArgs& args, const CommandContext& context) {
                      {"selection_ms_p50", percentile(ms, 0.5)},
                      {"selection_ms_p99", percentile(ms, 0.99)},
                      {"selection_ms_max", ms.empty() ? 0.0 : *std::max_element(ms.begin(), ms.end())},
-                     {"mean_drawn_triangles", triangles_sum / n}};
+                     {"mean_drawn_triangles", triangles_sum / n},
+                     {"frames_png", pictures},
+                     {"render_seconds", std::chrono::duration<double>(paused).count()}};
 
   if (!args.plot.empty()) {
     std::vector<ChartSeries> series(5);
@@ -295,6 +328,10 @@ void add_walk_command(CLI::App& app, CommandContext& context) {
   command->add_flag("--no-prefetch", args->no_prefetch, "Load only what frames want");
   command->add_option("--csv", args->csv, "Write per-frame statistics to this CSV file");
   command->add_option("--plot", args->plot, "Write per-frame charts to this PNG file");
+  command->add_option("--frames-png", args->frames_png,
+                      "Render selected frames (960x540, nodes tinted by detail level) into DIR/frame_NNNNNN.png");
+  command->add_option("--frames-png-every", args->frames_png_every, "With --frames-png: every K-th frame, from frame 0")
+      ->capture_default_str();
   command->callback([args, &context] { context.exit_code = run_walk(*args, context); });
 }
 

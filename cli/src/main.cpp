@@ -53,6 +53,7 @@ int main(int argc, char** argv) {
   add_export_command(app, context);
   add_bake_command(app, context);
   add_info_command(app, context);
+  add_render_command(app, context);
 
 
 

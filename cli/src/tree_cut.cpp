@@ -1,5 +1,7 @@
 #include "tree_cut.h"
 
+#include "octolod/bake/simplify.h"
+
 namespace octolod::cli {
 namespace {
 
@@ -54,6 +56,28 @@ Result<std::vector<NodeMesh>> load_cut(const std::filesystem::path& root, const 
     meshes.push_back(std::move(mesh).value());
   }
   return meshes;
+}
+
+Result<NodeMesh> load_cut_mesh(const std::filesystem::path& root, const Manifest& manifest,
+                               std::span<const CutEntry> cut) {
+  Result<std::vector<NodeMesh>> meshes = load_cut(root, manifest, cut);
+  if (!meshes.ok()) return meshes.status();
+  std::vector<const NodeMesh*> parts;
+  parts.reserve(cut.size());
+  for (std::size_t i = 0; i < cut.size(); ++i) {
+    const NodeMesh& mesh = meshes.value()[i];
+    if (!(mesh.layout == manifest.layout))
+      return bad_input_error(
+          (root / manifest.nodes[cut[i].node].lods[cut[i].lod].file).string() + ": layout " +
+          mesh.layout.describe() + " differs from the manifest's " + manifest.layout.describe());
+    parts.push_back(&mesh);
+  }
+  if (parts.empty()) {
+    NodeMesh empty;
+    empty.layout = manifest.layout;
+    return empty;
+  }
+  return bake::merge_meshes(parts);
 }
 
 }  // namespace octolod::cli

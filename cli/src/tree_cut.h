@@ -16,6 +16,7 @@ namespace octolod::cli {
 struct CutEntry {
   std::uint32_t node = 0;  // index into Manifest::nodes
   std::uint32_t lod = 0;   // index into NodeInfo::lods
+  friend bool operator==(const CutEntry&, const CutEntry&) = default;
 };
 
 // Per node, top-down: the coarsest LOD whose error <= max_error (model units); otherwise its
@@ -36,5 +37,14 @@ CutSummary summarize_cut(const Manifest& manifest, std::span<const CutEntry> cut
 // Loads every entry's node file from the tree at `root`.
 Result<std::vector<NodeMesh>> load_cut(const std::filesystem::path& root, const Manifest& manifest,
                                        std::span<const CutEntry> cut);
+
+// The cut as one mesh, as the runtime draws it: the entries' node files in cut order,
+// concatenated, with vertices whose records (position and attributes) are bit-identical welded
+// into one (bake::merge_meshes). A cut is crack-free because neighbouring nodes keep their shared
+// boundary vertices bit-identical, so after welding the seams between nodes are shared vertices.
+// The layout is the manifest's. Errors: those of reading the node files, and bad_input when a
+// node file's layout differs from the manifest's.
+Result<NodeMesh> load_cut_mesh(const std::filesystem::path& root, const Manifest& manifest,
+                               std::span<const CutEntry> cut);
 
 }  // namespace octolod::cli

@@ -1,0 +1,282 @@
+// octolod compare: how good are a baked tree's LODs? For a ladder of uniform cuts (every node at
+// one error target), the cut's triangle count and its Metro-style two-sided RMS and Hausdorff
+// distance to the input, next to the same numbers for the QSlim-style reference (OpenMesh
+// Decimater, octolod/measure/reference.h) at the same triangle count, and their ratios — the
+// comparison of seed 002 Tables 5.2 (triangles and time per level) and 5.4 (error per level).
+//
+// Exit codes: 1 usage, 2 a malformed file or an input that is not the one the tree was baked
+// from, 4 a file cannot be read.
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <limits>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "command.h"
+#include "mesh_file.h"
+#include "metro_json.h"
+#include "octolod/formats/manifest.h"
+#include "octolod/measure/metro.h"
+#include "octolod/measure/reference.h"
+#include "progress.h"
+#include "tree_cut.h"
+
+namespace octolod::cli {
+namespace {
+
+struct CompareArgs {
+  std::string input;
+  std::string tree;
+  std::vector<double> errors;
+  std::vector<double> fractions{0.3, 0.1, 0.03, 0.01};
+  std::uint64_t samples = 0;
+  bool markdown = false;
+};
+
+struct Row {
+  double error_target = 0;        // model units
+  std::vector<CutEntry> cut;
+  CutSummary summary;             // triangles, largest stored error of the cut
+  measure::MetroReport cut_metro;
+  std::uint64_t reference_triangles = 0;
+  measure::MetroReport reference_metro;
+};
+
+// Error targets whose uniform cuts come closest (in log scale) to each wanted fraction of the
+// input's triangles, chosen among the tree's stored LOD errors (the only values at which a cut
+// changes). Ascending, without repeats.
+std::vector<double> targets_for_fractions(const Manifest& manifest,
+                                          const std::vector<double>& fractions) {
+  std::vector<double> candidates{0.0};
+  for (const NodeInfo& node : manifest.nodes)
+    for (const LodInfo& lod : node.lods) candidates.push_back(lod.error);
+  std::sort(candidates.begin(), candidates.end());
+  candidates.erase(std::unique(candidates.begin(), candidates.end()), candidates.end());
+  std::vector<double> triangles;
+  triangles.reserve(candidates.size());
+  for (double e : candidates)
+    triangles.push_back(static_cast<double>(
+        std::max<std::uint64_t>(1, summarize_cut(manifest, uniform_error_cut(manifest, e)).triangles)));
+
+  std::vector<double> chosen;
+  const double input = static_cast<double>(std::max<std::uint64_t>(1, manifest.input_triangles));
+  for (double fraction : fractions) {
+    std::size_t best = 0;
+    double best_distance = std::numeric_limits<double>::infinity();
+    for (std::size_t i = 0; i < candidates.size(); ++i) {
+      const double distance = std::abs(std::log(triangles[i] / (fraction * input)));
+      if (distance < best_distance) {
+        best_distance = distance;
+        best = i;
+      }
+    }
+    chosen.push_back(candidates[best]);
+  }
+  std::sort(chosen.begin(), chosen.end());
+  chosen.erase(std::unique(chosen.begin(), chosen.end()), chosen.end());
+  return chosen;
+}
+
+double bake_seconds(const Manifest& manifest) {
+  auto it = manifest.stage_seconds.find("total");
+  return it == manifest.stage_seconds.end() ? std::nan("") : it->second;
+}
+
+double ratio(double a, double b) { return b > 0 ? a / b : (a > 0 ? std::numeric_limits<double>::infinity() : 1.0); }
+
+double percent_of(std::uint64_t part, std::uint64_t whole) {
+  return whole ? 100.0 * static_cast<double>(part) / static_cast<double>(whole) : 0.0;
+}
+
+nlohmann::json number_or_null(double value) {
+  return std::isfinite(value) ? nlohmann::json(value) : nlohmann::json(nullptr);
+}
+
+void print_table(const std::vector<Row>& rows, const Manifest& manifest, bool markdown) {
+  const char* header[] = {"error target", "stored max", "triangles", "% input", "bake s",
+                          "RMS",          "Hausdorff",  "ref tris",  "ref RMS", "ref Hausdorff",
+                          "RMS ratio",    "Hausdorff ratio"};
+  if (markdown) {
+    std::printf("|");
+    for (const char* h : header) std::printf(" %s |", h);
+    std::printf("\n|");
+    for (std::size_t i = 0; i < std::size(header); ++i) std::printf("---:|");
+    std::printf("\n");
+  } else {
+    std::printf("%12s %11s %10s %8s %7s %11s %11s %10s %11s %13s %9s %15s\n", header[0],
+                header[1], header[2], header[3], header[4], header[5], header[6], header[7],
+                header[8], header[9], header[10], header[11]);
+  }
+  const char* row_format = markdown
+                               ? "| %.4g | %.4g | %llu | %.2f | %.2f | %.4g | %.4g | %llu | %.4g | "
+                                 "%.4g | %.2f | %.2f |\n"
+                               : "%12.4g %11.4g %10llu %8.2f %7.2f %11.4g %11.4g %10llu %11.4g "
+                                 "%13.4g %9.2f %15.2f\n";
+  for (const Row& r : rows)
+    std::printf(row_format, r.error_target, r.summary.max_error,
+                static_cast<unsigned long long>(r.summary.triangles),
+                percent_of(r.summary.triangles, manifest.input_triangles), bake_seconds(manifest),
+                r.cut_metro.two_sided.rms, r.cut_metro.two_sided.max,
+                static_cast<unsigned long long>(r.reference_triangles),
+                r.reference_metro.two_sided.rms, r.reference_metro.two_sided.max,
+                ratio(r.cut_metro.two_sided.rms, r.reference_metro.two_sided.rms),
+                ratio(r.cut_metro.two_sided.max, r.reference_metro.two_sided.max));
+}
+
+nlohmann::json rows_json(const std::vector<Row>& rows, const Manifest& manifest) {
+  nlohmann::json out = nlohmann::json::array();
+  for (const Row& r : rows)
+    out.push_back(
+        {{"error_target", r.error_target},
+         {"stored_max_error", r.summary.max_error},
+         {"node_lods", r.cut.size()},
+         {"triangles", r.summary.triangles},
+         {"percent_of_input", percent_of(r.summary.triangles, manifest.input_triangles)},
+         {"rms", r.cut_metro.two_sided.rms},
+         {"hausdorff", r.cut_metro.two_sided.max},
+         {"cut", metro_json(r.cut_metro)},
+         {"reference_triangles", r.reference_triangles},
+         {"reference_rms", r.reference_metro.two_sided.rms},
+         {"reference_hausdorff", r.reference_metro.two_sided.max},
+         {"reference", metro_json(r.reference_metro)},
+         {"rms_ratio", number_or_null(ratio(r.cut_metro.two_sided.rms, r.reference_metro.two_sided.rms))},
+         {"hausdorff_ratio",
+          number_or_null(ratio(r.cut_metro.two_sided.max, r.reference_metro.two_sided.max))}});
+  return out;
+}
+
+int run_compare(const CompareArgs& args, const CommandContext& context) {
+  for (double e : args.errors)
+    if (!(e >= 0 && std::isfinite(e)))
+      return report(usage_error("--errors: every target must be a finite distance >= 0"));
+  for (double f : args.fractions)
+    if (!(f > 0 && f <= 1))
+      return report(usage_error("--fractions: every fraction must be in (0, 1]"));
+  Progress progress(context);
+  const std::filesystem::path root = args.tree;
+  Result<Manifest> manifest = read_manifest(root / std::string(kManifestFileName));
+  if (!manifest.ok()) return report(manifest.status());
+  if (manifest->nodes.empty() || manifest->input_triangles == 0)
+    return report(bad_input_error(args.tree + ": the tree holds no triangles"));
+  Result<MeshFile> input = read_mesh_file(args.input);
+  if (!input.ok()) return report(input.status());
+  if (input->mesh.triangle_count() != manifest->input_triangles)
+    return report(bad_input_error(
+        args.input + " has " + std::to_string(input->mesh.triangle_count()) +
+        " triangles, but the tree at " + args.tree + " was baked from " +
+        std::to_string(manifest->input_triangles) + " (" + manifest->parameters.input + ")"));
+
+  std::vector<double> targets = args.errors;
+  if (targets.empty()) targets = targets_for_fractions(manifest.value(), args.fractions);
+  std::vector<Row> rows;
+  for (double target : targets) {
+    Row row;
+    row.error_target = target;
+    row.cut = uniform_error_cut(manifest.value(), target);
+    row.summary = summarize_cut(manifest.value(), row.cut);
+    rows.push_back(std::move(row));
+  }
+  std::stable_sort(rows.begin(), rows.end(), [](const Row& a, const Row& b) {
+    return a.summary.triangles > b.summary.triangles;
+  });
+  // derived targets that select the same cut (same triangle count) show once: the smallest
+  // target that gives it
+  if (args.errors.empty())
+    rows.erase(std::unique(rows.begin(), rows.end(),
+                           [](const Row& a, const Row& b) { return a.cut == b.cut; }),
+               rows.end());
+
+  measure::MetroOptions metro;
+  metro.samples = args.samples;
+  std::vector<std::uint32_t> counts;
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    Row& row = rows[i];
+    progress.message("compare: cut " + std::to_string(i + 1) + "/" + std::to_string(rows.size()) +
+                     " (error " + std::to_string(row.error_target) + ", " +
+                     std::to_string(row.summary.triangles) + " triangles)");
+    Result<NodeMesh> cut = load_cut_mesh(root, manifest.value(), row.cut);
+    if (!cut.ok()) return report(cut.status());
+    Result<measure::MetroReport> m = measure::evaluate(input->mesh, cut.value(), metro);
+    if (!m.ok())
+      return report(Status(m.status().code(), m.status().message() + " (a = " + args.input +
+                                                   ", b = the cut at error " +
+                                                   std::to_string(row.error_target) + ")"));
+    row.cut_metro = m.value();
+    counts.push_back(static_cast<std::uint32_t>(
+        std::clamp<std::uint64_t>(row.summary.triangles, 1, 0xFFFFFFFFu)));
+  }
+
+  progress.message("compare: reference decimation to " + std::to_string(counts.size()) +
+                   " triangle counts");
+  measure::ReferenceStats reference_stats;
+  Result<std::vector<NodeMesh>> references =
+      measure::reference_simplify_ladder(input->mesh, counts, &reference_stats);
+  if (!references.ok())
+    return report(Status(references.status().code(),
+                         args.input + ": " + references.status().message()));
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    const NodeMesh& reference = references.value()[i];
+    rows[i].reference_triangles = reference.triangle_count();
+    Result<measure::MetroReport> m = measure::evaluate(input->mesh, reference, metro);
+    if (!m.ok())
+      return report(Status(m.status().code(), m.status().message() + " (a = " + args.input +
+                                                   ", b = its reference at " +
+                                                   std::to_string(counts[i]) + " triangles)"));
+    rows[i].reference_metro = m.value();
+  }
+
+  if (context.json) {
+    print_json({{"input", args.input},
+                {"tree", args.tree},
+                {"input_triangles", manifest->input_triangles},
+                {"method", manifest->parameters.method},
+                {"bake_seconds", number_or_null(bake_seconds(manifest.value()))},
+                {"diagonal", rows.empty() ? 0.0 : rows.front().cut_metro.diagonal},
+                {"reference_seconds", reference_stats.seconds},
+                {"rows", rows_json(rows, manifest.value())}});
+    return 0;
+  }
+  if (!args.markdown)
+    std::printf("%s (%llu triangles) vs %s (method %s); distances in model units, diagonal %.6g\n",
+                args.input.c_str(), static_cast<unsigned long long>(manifest->input_triangles),
+                args.tree.c_str(),
+                manifest->parameters.method.empty() ? "none" : manifest->parameters.method.c_str(),
+                rows.empty() ? 0.0 : rows.front().cut_metro.diagonal);
+  print_table(rows, manifest.value(), args.markdown);
+  return 0;
+}
+
+}  // namespace
+
+void add_compare_command(CLI::App& app, CommandContext& context) {
+  auto args = std::make_shared<CompareArgs>();
+  CLI::App* command = app.add_subcommand(
+      "compare",
+      "Uniform cuts of a baked tree vs its input, next to the QSlim-style reference at the same "
+      "triangle counts (two-sided RMS and Hausdorff)");
+  command->add_option("input", args->input, "The .ply the tree was baked from")->required();
+  command->add_option("tree", args->tree, "Baked tree directory (holds manifest.json)")->required();
+  CLI::Option* errors =
+      command
+          ->add_option("--errors", args->errors,
+                       "Comma-separated error targets (model units), one uniform cut each")
+          ->delimiter(',');
+  command
+      ->add_option("--fractions", args->fractions,
+                   "Without --errors: cuts closest to these fractions of the input's triangles, "
+                   "chosen among the tree's stored LOD errors")
+      ->delimiter(',')
+      ->capture_default_str()
+      ->excludes(errors);
+  command
+      ->add_option("--samples", args->samples,
+                   "Metro samples per direction; 0 = 10 per triangle, 100K..1M")
+      ->capture_default_str();
+  command->add_flag("--markdown", args->markdown, "Print the table as Markdown");
+  command->callback([args, &context] { context.exit_code = run_compare(*args, context); });
+}
+
+}  // namespace octolod::cli

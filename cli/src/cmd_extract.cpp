@@ -1,0 +1,115 @@
+// octolod extract: the mesh the runtime would draw for one uniform cut of a baked tree — every
+// node at one error target (the coarsest LOD with stored error <= E) or at one octree depth —
+// as a single welded PLY: the node LODs' vertices that are bit-identical (the locked seams
+// between nodes) become shared vertices, so the file is as closed as the input was.
+//
+// Exit codes: 1 usage, 2 a malformed manifest or node file, 4 a file cannot be read or the
+// output written (nothing is left behind then).
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+#include <optional>
+#include <string>
+#include <system_error>
+#include <vector>
+
+#include "command.h"
+#include "mesh_file.h"
+#include "octolod/formats/manifest.h"
+#include "progress.h"
+#include "tree_cut.h"
+
+namespace octolod::cli {
+namespace {
+
+struct ExtractArgs {
+  std::string tree;
+  std::optional<double> error;
+  std::optional<std::uint32_t> level;
+  std::string output;
+  bool ascii = false;
+};
+
+int run_extract(const ExtractArgs& args, const CommandContext& context) {
+  if (args.error && !(*args.error >= 0 && std::isfinite(*args.error)))
+    return report(usage_error("--error must be a finite distance >= 0 (model units)"));
+  const auto start = std::chrono::steady_clock::now();
+  const std::filesystem::path root = args.tree;
+  Result<Manifest> manifest = read_manifest(root / std::string(kManifestFileName));
+  if (!manifest.ok()) return report(manifest.status());
+
+  const std::vector<CutEntry> cut = args.error ? uniform_error_cut(manifest.value(), *args.error)
+                                               : depth_cut(manifest.value(), *args.level);
+  if (cut.empty())
+    return report(bad_input_error(args.tree + ": the tree has no node LODs (an empty mesh was baked)"));
+  Progress progress(context);
+  progress.message("extract: " + std::to_string(cut.size()) + " node LODs");
+  Result<NodeMesh> mesh = load_cut_mesh(root, manifest.value(), cut);
+  if (!mesh.ok()) return report(mesh.status());
+  const Status written = write_mesh_file(args.output, mesh.value(), args.ascii);
+  if (!written.ok()) return report(written);
+
+  std::error_code ec;
+  const std::uintmax_t bytes = std::filesystem::file_size(args.output, ec);
+  if (ec) return report(io_error(args.output + ": cannot stat the written file: " + ec.message()));
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  progress.finish("extract", seconds);
+  const CutSummary summary = summarize_cut(manifest.value(), cut);
+  const double percent = manifest->input_triangles
+                             ? 100.0 * static_cast<double>(mesh->triangle_count()) /
+                                   static_cast<double>(manifest->input_triangles)
+                             : 0.0;
+  if (context.json) {
+    nlohmann::json lods = nlohmann::json::array();
+    for (const CutEntry& e : cut)
+      lods.push_back({{"node", manifest->nodes[e.node].path}, {"lod", e.lod}});
+    print_json({{"file", args.output},
+                {"node_lods", cut.size()},
+                {"lods", lods},
+                {"triangles", mesh->triangle_count()},
+                {"vertices", mesh->vertex_count()},
+                {"input_triangles", manifest->input_triangles},
+                {"percent_of_input", percent},
+                {"max_error", summary.max_error},
+                {"layout", mesh->layout.describe()},
+                {"bytes", bytes},
+                {"seconds", seconds}});
+  } else {
+    std::printf("%s: %zu node LODs, %zu triangles (%.2f%% of the input), %zu vertices, "
+                "max stored error %g, %.2f MB in %.2f s\n",
+                args.output.c_str(), cut.size(), mesh->triangle_count(), percent,
+                mesh->vertex_count(), summary.max_error, static_cast<double>(bytes) / 1e6,
+                seconds);
+  }
+  return 0;
+}
+
+}  // namespace
+
+void add_extract_command(CLI::App& app, CommandContext& context) {
+  auto args = std::make_shared<ExtractArgs>();
+  CLI::App* command = app.add_subcommand(
+      "extract", "Write the mesh of a uniform cut of a baked tree as one welded PLY");
+  command->add_option("tree", args->tree, "Baked tree directory (holds manifest.json)")->required();
+  CLI::Option* error =
+      command->add_option("--error", args->error,
+                          "Per node, the coarsest LOD whose stored error is <= E (model units)");
+  CLI::Option* level = command->add_option(
+      "--level", args->level, "The nodes at octree depth K (and leaves above it), finest LOD each");
+  error->excludes(level);
+  command->add_option("-o,--output", args->output, "Output .ply file (written atomically)")
+      ->required();
+  command->add_flag("--ascii", args->ascii, "Write ascii PLY (default: binary little-endian)");
+  command->callback([args, error, level, &context] {
+    if (error->count() + level->count() != 1) {
+      context.exit_code = report(usage_error("extract: give exactly one of --error E or --level K"));
+      return;
+    }
+    context.exit_code = run_extract(*args, context);
+  });
+}
+
+}  // namespace octolod::cli

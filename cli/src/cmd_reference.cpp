@@ -1,0 +1,91 @@
+// octolod reference: the QSlim-style baseline (Garland & Heckbert 1997) a baked LOD is compared
+// against — OpenMesh's Decimater with the quadric module and a normal-flip guard
+// (octolod/measure/reference.h) — at a given triangle count, written as PLY.
+//
+// Exit codes: 1 usage, 2 malformed input or no triangles, 4 the input cannot be read or the
+// output written (nothing is left behind then).
+#include <cstdio>
+#include <memory>
+#include <string>
+#include <system_error>
+
+#include "command.h"
+#include "mesh_file.h"
+#include "octolod/measure/reference.h"
+#include "progress.h"
+
+namespace octolod::cli {
+namespace {
+
+struct ReferenceArgs {
+  std::string input;
+  std::uint32_t triangles = 0;
+  std::string output;
+  bool ascii = false;
+};
+
+int run_reference(const ReferenceArgs& args, const CommandContext& context) {
+  Progress progress(context);
+  Result<MeshFile> input = read_mesh_file(args.input);
+  if (!input.ok()) return report(input.status());
+  progress.message("reference: decimating " + std::to_string(input->mesh.triangle_count()) +
+                   " triangles to " + std::to_string(args.triangles));
+  measure::ReferenceStats stats;
+  Result<NodeMesh> simplified = measure::reference_simplify(input->mesh, args.triangles, &stats);
+  if (!simplified.ok())
+    return report(Status(simplified.status().code(),
+                         args.input + ": " + simplified.status().message()));
+  progress.finish("reference", stats.seconds);
+  const Status written =
+      write_mesh_file(args.output, simplified.value(), args.ascii, input->color_type);
+  if (!written.ok()) return report(written);
+
+  std::error_code ec;
+  const std::uintmax_t bytes = std::filesystem::file_size(args.output, ec);
+  if (ec) return report(io_error(args.output + ": cannot stat the written file: " + ec.message()));
+  if (context.json) {
+    print_json({{"file", args.output},
+                {"input", args.input},
+                {"input_triangles", stats.input_triangles},
+                {"target_triangles", args.triangles},
+                {"triangles", simplified->triangle_count()},
+                {"vertices", simplified->vertex_count()},
+                {"welded_vertices", stats.welded_vertices},
+                {"detached_triangles", stats.detached_triangles},
+                {"layout", simplified->layout.describe()},
+                {"bytes", bytes},
+                {"seconds", stats.seconds}});
+  } else {
+    const std::string detached =
+        stats.detached_triangles ? ", " + std::to_string(stats.detached_triangles) +
+                                       " non-manifold triangles kept unsimplified"
+                                 : "";
+    std::printf("%s: %llu -> %zu triangles (target %u), %zu vertices%s in %.2f s\n",
+                args.output.c_str(), static_cast<unsigned long long>(stats.input_triangles),
+                simplified->triangle_count(), args.triangles, simplified->vertex_count(),
+                detached.c_str(), stats.seconds);
+  }
+  return 0;
+}
+
+}  // namespace
+
+void add_reference_command(CLI::App& app, CommandContext& context) {
+  auto args = std::make_shared<ReferenceArgs>();
+  CLI::App* command = app.add_subcommand(
+      "reference",
+      "QSlim-style reference simplification (OpenMesh Decimater, quadrics + normal-flip guard)");
+  command->add_option("input", args->input, "Input mesh (.ply)")->required();
+  command
+      ->add_option("--triangles", args->triangles,
+                   "Target triangle count (reached exactly or one below on closed meshes; "
+                   "boundaries and non-manifold parts can stop above it)")
+      ->required()
+      ->check(CLI::Range(1u, 0xFFFFFFFFu));
+  command->add_option("-o,--output", args->output, "Output .ply file (written atomically)")
+      ->required();
+  command->add_flag("--ascii", args->ascii, "Write ascii PLY (default: binary little-endian)");
+  command->callback([args, &context] { context.exit_code = run_reference(*args, context); });
+}
+
+}  // namespace octolod::cli

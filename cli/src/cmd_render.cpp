@@ -1,0 +1,204 @@
+// octolod render: one picture of a baked tree as the streaming runtime selects it for a camera.
+// The tree is opened with octolod::runtime's StreamingTree on a SynchronousExecutor and updated
+// until every LOD the view wants has loaded, so the picture shows the settled cut (no
+// fallbacks), rendered with real OpenGL offscreen and tinted by detail level.
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <memory>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "command.h"
+#include "frame_render.h"
+#include "offscreen_renderer.h"
+#include "octolod/runtime/streaming_tree.h"
+#include "view_camera.h"
+
+namespace octolod::cli {
+namespace {
+
+struct RenderArgs {
+  std::string tree;
+  std::string camera;  // "ex,ey,ez,tx,ty,tz", empty: framing_camera
+  double fov_degrees = 60.0;
+  int width = 1024;
+  int height = 768;
+  double sse = 2.0;
+  std::string budget = "512M";
+  std::string output;
+};
+
+// Updates until a frame neither issues nor waits for a load. Each update installs what the
+// previous run_pending() loaded and queues at most max_loads_in_flight more, so a cut of n node
+// LODs settles in about n / max_loads_in_flight updates; the bound only stops a pathological
+// budget from cycling forever.
+constexpr int kMaxUpdates = 4096;
+constexpr std::uint32_t kLoadsPerUpdate = 256;
+
+Result<runtime::Camera> parse_camera(const std::string& text, const Bounds& bounds, const Lens& lens) {
+  std::vector<float> values;
+  std::stringstream in(text);
+  std::string item;
+  while (std::getline(in, item, ',')) {
+    std::size_t used = 0;
+    float v = 0;
+    try {
+      v = std::stof(item, &used);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    if (used == 0 || used != item.size() || !std::isfinite(v))
+      return usage_error("--camera: '" + item + "' is not a number (expected eye_x,eye_y,eye_z,target_x,target_y,target_z)");
+    values.push_back(v);
+  }
+  if (values.size() != 6)
+    return usage_error("--camera: expected 6 comma-separated numbers eye_x,eye_y,eye_z,target_x,target_y,target_z, got " +
+                       std::to_string(values.size()));
+  const glm::vec3 eye(values[0], values[1], values[2]), target(values[3], values[4], values[5]);
+  if (!(glm::length(target - eye) > 0.0f)) return usage_error("--camera: eye and target must differ");
+  return fitted_camera(eye, target, bounds, lens);
+}
+
+// Per detail level (FramePainter::detail_level): nodes drawn and their triangles.
+struct LevelCount {
+  std::uint64_t nodes = 0;
+  std::uint64_t triangles = 0;
+};
+
+int run_render(const RenderArgs& args, const CommandContext& context) {
+  Result<std::uint64_t> budget = parse_byte_size(args.budget);
+  if (!budget.ok()) return report(budget.status());
+  if (args.width < 16 || args.width > 8192 || args.height < 16 || args.height > 8192)
+    return report(usage_error("--width and --height must be within 16..8192 pixels"));
+  if (!(args.fov_degrees > 1.0 && args.fov_degrees < 179.0))
+    return report(usage_error("--fov must be between 1 and 179 degrees"));
+  if (args.output.empty()) return report(usage_error("-o FILE.png is required"));
+
+  const auto start = std::chrono::steady_clock::now();
+  runtime::StreamingOptions options;
+  options.max_resident_bytes = budget.value();
+  options.target_sse_pixels = args.sse;
+  options.prefetch = false;  // one view: load what it draws, nothing around it
+  options.max_loads_in_flight = kLoadsPerUpdate;
+  options.log = [](std::string_view message) {
+    std::fprintf(stderr, "warning: %.*s\n", static_cast<int>(message.size()), message.data());
+  };
+  auto executor = std::make_shared<runtime::SynchronousExecutor>();
+  Result<std::unique_ptr<runtime::StreamingTree>> opened =
+      runtime::StreamingTree::open_directory(args.tree, executor, options);
+  if (!opened.ok()) return report(opened.status());
+  runtime::StreamingTree& tree = *opened.value();
+
+  Lens lens;
+  lens.fovy_radians = static_cast<float>(args.fov_degrees * 3.14159265358979 / 180.0);
+  lens.width = args.width;
+  lens.height = args.height;
+  Result<runtime::Camera> camera = args.camera.empty() ? Result<runtime::Camera>(framing_camera(tree.manifest().bounds, lens))
+                                                       : parse_camera(args.camera, tree.manifest().bounds, lens);
+  if (!camera.ok()) return report(camera.status());
+
+  // select and load until the cut is complete
+  std::uint64_t loads = 0, failed = 0;
+  int updates = 1;
+  const runtime::FrameResult* frame = &tree.update(camera.value());
+  for (; updates < kMaxUpdates; ++updates) {
+    if (frame->stats.loads_in_flight == 0 && frame->stats.loads_issued == 0) break;
+    executor->run_pending();
+    frame = &tree.update(camera.value());
+    loads += frame->stats.loads_completed;
+    failed += frame->stats.loads_failed;
+  }
+  const runtime::FrameStats& stats = frame->stats;
+  const bool complete = stats.loads_in_flight == 0 && stats.loads_issued == 0;
+  if (!complete)
+    std::fprintf(stderr, "warning: %s: loads still pending after %d updates; the picture shows fallbacks\n",
+                 args.tree.c_str(), updates);
+
+  // picture
+  const FramePainter painter(tree.manifest());
+  Result<Image> image = painter.paint(*frame, camera.value(), args.width, args.height);
+  if (!image.ok()) return report(image.status());
+  const Status written = write_png(args.output, image.value());
+  if (!written.ok()) return report(written);
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+
+  // summary
+  std::vector<LevelCount> levels;
+  for (const runtime::DrawItem& draw : frame->draws) {
+    const std::uint32_t level = painter.detail_level(draw);
+    if (levels.size() <= level) levels.resize(level + 1);
+    levels[level].nodes += 1;
+    levels[level].triangles += draw.mesh ? draw.mesh->triangle_count() : 0;
+  }
+  const glm::vec3 eye = camera->position;
+  nlohmann::json histogram = nlohmann::json::array();
+  for (std::size_t level = 0; level < levels.size(); ++level) {
+    if (levels[level].nodes == 0) continue;
+    const glm::vec3 tint = lod_tint(level);
+    char hex[8];
+    std::snprintf(hex, sizeof hex, "#%02x%02x%02x", static_cast<unsigned>(std::lround(tint.r * 255.0f)),
+                  static_cast<unsigned>(std::lround(tint.g * 255.0f)), static_cast<unsigned>(std::lround(tint.b * 255.0f)));
+    histogram.push_back({{"level", level}, {"nodes", levels[level].nodes}, {"triangles", levels[level].triangles},
+                         {"tint", hex}});
+  }
+  if (context.json) {
+    print_json({{"tree", args.tree},
+                {"output", args.output},
+                {"width", args.width},
+                {"height", args.height},
+                {"eye", {eye.x, eye.y, eye.z}},
+                {"fov_degrees", args.fov_degrees},
+                {"target_sse_pixels", args.sse},
+                {"budget_bytes", budget.value()},
+                {"updates", updates},
+                {"complete", complete},
+                {"nodes_drawn", stats.drawn_nodes},
+                {"triangles", stats.drawn_triangles},
+                {"fallbacks", stats.fallbacks},
+                {"holes", stats.holes},
+                {"culled", stats.culled},
+                {"coarsening", stats.coarsening},
+                {"loads", loads},
+                {"loads_failed", failed},
+                {"resident_bytes", stats.resident_bytes},
+                {"lod_histogram", histogram},
+                {"seconds", seconds}});
+  } else {
+    std::printf("%s -> %s (%dx%d), eye (%.4g, %.4g, %.4g), %u updates%s\n", args.tree.c_str(), args.output.c_str(),
+                args.width, args.height, static_cast<double>(eye.x), static_cast<double>(eye.y),
+                static_cast<double>(eye.z), static_cast<unsigned>(updates), complete ? "" : " (incomplete)");
+    std::printf("  drawn: %u nodes, %llu triangles, %u fallbacks; %llu loads (%llu failed), %.1f MB resident\n",
+                stats.drawn_nodes, static_cast<unsigned long long>(stats.drawn_triangles), stats.fallbacks,
+                static_cast<unsigned long long>(loads), static_cast<unsigned long long>(failed),
+                static_cast<double>(stats.resident_bytes) / 1048576.0);
+    for (const nlohmann::json& level : histogram)
+      std::printf("  level %u (%s): %llu nodes, %llu triangles\n", level["level"].get<unsigned>(),
+                  level["tint"].get<std::string>().c_str(), level["nodes"].get<unsigned long long>(),
+                  level["triangles"].get<unsigned long long>());
+  }
+  return 0;
+}
+
+}  // namespace
+
+void add_render_command(CLI::App& app, CommandContext& context) {
+  auto args = std::make_shared<RenderArgs>();
+  CLI::App* command = app.add_subcommand(
+      "render", "Render a baked tree as the streaming runtime selects it, nodes tinted by detail level (PNG)");
+  command->add_option("tree", args->tree, "Baked tree directory (holds manifest.json)")->required();
+  command->add_option("-o,--output", args->output, "PNG file to write (atomically)")->required();
+  command->add_option("--camera", args->camera,
+                      "eye_x,eye_y,eye_z,target_x,target_y,target_z in model units (default: frame the whole model)");
+  command->add_option("--fov", args->fov_degrees, "Vertical field of view in degrees")->capture_default_str();
+  command->add_option("--width", args->width, "Picture width in pixels")->capture_default_str();
+  command->add_option("--height", args->height, "Picture height in pixels (the SSE viewport)")->capture_default_str();
+  command->add_option("--sse", args->sse, "Screen-space error target in pixels")->capture_default_str();
+  command->add_option("--budget", args->budget, "Cache budget: 8M, 512K, 1G")->capture_default_str();
+  command->callback([args, &context] { context.exit_code = run_render(*args, context); });
+}
+
+}  // namespace octolod::cli

@@ -1,0 +1,464 @@
+// measure_cli_tests: the measuring commands run as a child process (OCTOLOD_CLI) — extract,
+// eval, reference and compare: their numbers on fixtures with known answers, their files, their
+// JSON, their exit codes and messages on bad input.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <sstream>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "octolod/formats/manifest.h"
+#include "octolod/formats/node_file.h"
+#include "octolod/formats/ply_reader.h"
+#include "octolod/formats/ply_writer.h"
+
+namespace octolod {
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+class TempDir {
+ public:
+  TempDir() {
+    path_ = fs::temp_directory_path() /
+            ("octolod_measure_cli_test_" + std::to_string(::getpid()) + "_" +
+             ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(path_);
+    fs::create_directories(path_);
+  }
+  ~TempDir() { fs::remove_all(path_); }
+  fs::path operator/(const std::string& name) const { return path_ / name; }
+
+ private:
+  fs::path path_;
+};
+
+struct CliRun {
+  int code = -1;
+  std::string out;  // stdout
+  std::string err;  // stderr
+};
+
+// Runs `octolod <arguments>` through the shell, capturing stdout and stderr.
+CliRun run_cli(const TempDir& dir, const std::string& arguments) {
+  const fs::path err_file = dir / "stderr.txt";
+  CliRun run;
+  FILE* pipe = ::popen((std::string(std::getenv("OCTOLOD_CLI")) + " " + arguments + " 2>" +
+                        err_file.string())
+                           .c_str(),
+                       "r");
+  if (pipe == nullptr) return run;
+  char buffer[4096];
+  std::size_t n;
+  while ((n = std::fread(buffer, 1, sizeof buffer, pipe)) > 0) run.out.append(buffer, n);
+  const int status = ::pclose(pipe);
+  run.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  std::ifstream in(err_file);
+  run.err.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  return run;
+}
+
+#define SKIP_WITHOUT_CLI() \
+  if (std::getenv("OCTOLOD_CLI") == nullptr) GTEST_SKIP() << "OCTOLOD_CLI not set"
+
+// A `cells` x `cells` grid over [0,1]^2 at z = height, normals +z, colour and uv from (x, y).
+NodeMesh plane(int cells, float height) {
+  NodeMesh m;
+  m.layout = {true, true, true};
+  for (int y = 0; y <= cells; ++y)
+    for (int x = 0; x <= cells; ++x) {
+      const float u = static_cast<float>(x) / static_cast<float>(cells);
+      const float v = static_cast<float>(y) / static_cast<float>(cells);
+      m.vertices.insert(m.vertices.end(), {u, v, height, 0, 0, 1, u, v, 0.5f, u, v});
+    }
+  auto id = [&](int x, int y) { return static_cast<std::uint32_t>(y * (cells + 1) + x); };
+  for (int y = 0; y < cells; ++y)
+    for (int x = 0; x < cells; ++x)
+      m.indices.insert(m.indices.end(), {id(x, y), id(x + 1, y), id(x + 1, y + 1), id(x, y),
+                                         id(x + 1, y + 1), id(x, y + 1)});
+  return m;
+}
+
+void write_mesh(const fs::path& path, const NodeMesh& mesh,
+                PlyColorType color_type = PlyColorType::float32) {
+  PlyWriteOptions options;
+  options.layout = mesh.layout;
+  options.color_type = color_type;
+  ASSERT_TRUE(write_ply(path, options, mesh.vertices, mesh.indices).ok()) << path;
+}
+
+NodeMesh read_mesh(const fs::path& path) {
+  Result<PlyMesh> ply = read_ply(path);
+  EXPECT_TRUE(ply.ok()) << ply.status().message();
+  NodeMesh m;
+  if (!ply.ok()) return m;
+  m.layout = ply->info.layout;
+  m.vertices = ply->vertices;
+  m.indices = ply->triangles;
+  return m;
+}
+
+// Edges (vertex index pairs, either direction) used by one triangle only: holes or cracks. 0 for
+// a closed mesh whose shared vertices are welded. (Non-manifold edges, used by 4 triangles where
+// a cluster folds two sheets together, are not openings and are not counted.)
+std::size_t open_edges(const NodeMesh& m) {
+  std::map<std::pair<std::uint32_t, std::uint32_t>, int> uses;
+  for (std::size_t t = 0; t < m.triangle_count(); ++t)
+    for (std::size_t c = 0; c < 3; ++c) {
+      std::uint32_t a = m.indices[3 * t + c], b = m.indices[3 * t + (c + 1) % 3];
+      if (b < a) std::swap(a, b);
+      ++uses[{a, b}];
+    }
+  std::size_t open = 0;
+  for (const auto& [edge, count] : uses) open += count == 1;
+  return open;
+}
+
+// --- eval --------------------------------------------------------------------------------------
+
+TEST(EvalCli, PlaneAgainstPlaneShiftedByDReportsD) {
+  SKIP_WITHOUT_CLI();
+  TempDir dir;
+  const float d = 0.125f;
+  write_mesh(dir / "a.ply", plane(8, 0.0f));
+  write_mesh(dir / "b.ply", plane(5, d));  // another tessellation of the shifted plane
+  const CliRun run = run_cli(dir, "--json eval " + (dir / "a.ply").string() + " " +
+                                      (dir / "b.ply").string() + " --samples 20000");
+  ASSERT_EQ(run.code, 0) << run.err;
+  const json r = json::parse(run.out);
+  for (const char* side : {"a_to_b", "b_to_a", "two_sided"}) {
+    EXPECT_NEAR(r[side]["mean"].get<double>(), d, 1e-6) << side;
+    EXPECT_NEAR(r[side]["rms"].get<double>(), d, 1e-6) << side;
+    EXPECT_NEAR(r[side]["max"].get<double>(), d, 1e-6) << side;
+    EXPECT_NEAR(r[side]["max_relative"].get<double>(), d / std::sqrt(2.0), 1e-6) << side;
+    // the attributes are the same linear fields on both
+    EXPECT_NEAR(r[side]["normal_max_degrees"].get<double>(), 0.0, 1e-3) << side;
+    EXPECT_NEAR(r[side]["color_rms"].get<double>(), 0.0, 1e-5) << side;
+    EXPECT_NEAR(r[side]["uv_rms"].get<double>(), 0.0, 1e-5) << side;
+  }
+  EXPECT_EQ(r["a_to_b"]["samples"], 20000);
+  EXPECT_EQ(r["a"]["triangles"], 128);
+  EXPECT_EQ(r["b"]["triangles"], 50);
+  EXPECT_NEAR(r["diagonal"].get<double>(), std::sqrt(2.0), 1e-6);
+
+  // the human report carries the same numbers
+  const CliRun text =
+      run_cli(dir, "eval " + (dir / "a.ply").string() + " " + (dir / "b.ply").string());
+  ASSERT_EQ(text.code, 0);
+  EXPECT_NE(text.out.find("Hausdorff 0.125"), std::string::npos) << text.out;
+  EXPECT_TRUE(text.err.empty()) << "no progress on stderr without --progress or a terminal";
+}
+
+TEST(EvalCli, AttributesOnlyOnOneSideAreNotCompared) {
+  SKIP_WITHOUT_CLI();
+  TempDir dir;
+  write_mesh(dir / "a.ply", plane(4, 0.0f));
+  NodeMesh bare;
+  bare.layout = {};
+  const NodeMesh full = plane(4, 0.0f);
+  for (std::size_t v = 0; v < full.vertex_count(); ++v)
+    bare.vertices.insert(bare.vertices.end(), full.vertices.begin() + static_cast<long>(v * 11),
+                         full.vertices.begin() + static_cast<long>(v * 11 + 3));
+  bare.indices = full.indices;
+  write_mesh(dir / "b.ply", bare);
+  const CliRun run = run_cli(dir, "--json eval " + (dir / "a.ply").string() + " " +
+                                      (dir / "b.ply").string() + " --samples 5000");
+  ASSERT_EQ(run.code, 0) << run.err;
+  const json r = json::parse(run.out);
+  EXPECT_LT(r["two_sided"]["max"].get<double>(), 1e-6);
+  EXPECT_FALSE(r["two_sided"].contains("normal_mean_degrees"));
+  EXPECT_FALSE(r["two_sided"].contains("color_rms"));
+}
+
+TEST(EvalCli, BadInputsExitWithCodeAndFileName) {
+  SKIP_WITHOUT_CLI();
+  TempDir dir;
+  write_mesh(dir / "good.ply", plane(2, 0.0f));
+  const std::string good = (dir / "good.ply").string();
+  // truncated binary body
+  {
+    std::ifstream in(dir / "good.ply", std::ios::binary);
+    std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    std::ofstream(dir / "cut.ply", std::ios::binary) << bytes.substr(0, bytes.size() - 7);
+  }
+  CliRun run = run_cli(dir, "eval " + good + " " + (dir / "cut.ply").string());
+  EXPECT_EQ(run.code, 2);
+  EXPECT_NE(run.err.find("cut.ply"), std::string::npos) << run.err;
+  // no faces at all
+  std::ofstream(dir / "points.ply") << "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\n"
+                                       "property float y\nproperty float z\nend_header\n0 0 0\n";
+  run = run_cli(dir, "eval " + (dir / "points.ply").string() + " " + good);
+  EXPECT_EQ(run.code, 2);
+  EXPECT_NE(run.err.find("points.ply: the mesh has no triangles"), std::string::npos) << run.err;
+  // zero area: every triangle degenerate
+  std::ofstream(dir / "flat.ply") << "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\n"
+                                     "property float y\nproperty float z\nelement face 1\n"
+                                     "property list uchar int vertex_indices\nend_header\n"
+                                     "0 0 0\n1 0 0\n2 0 0\n3 0 1 2\n";
+  run = run_cli(dir, "eval " + good + " " + (dir / "flat.ply").string());
+  EXPECT_EQ(run.code, 2);
+  EXPECT_NE(run.err.find("flat.ply"), std::string::npos) << run.err;
+  // missing file: I/O
+  run = run_cli(dir, "eval " + good + " " + (dir / "missing.ply").string());
+  EXPECT_EQ(run.code, 4);
+  EXPECT_NE(run.err.find("missing.ply"), std::string::npos) << run.err;
+  // usage
+  EXPECT_EQ(run_cli(dir, "eval " + good).code, 1);
+  EXPECT_EQ(run_cli(dir, "eval " + good + " " + good + " --samples lots").code, 1);
+}
+
+// --- extract -----------------------------------------------------------------------------------
+
+// A baked tree by hand, positions only:
+//
+//   root  lod0: both halves (4 triangles, error 0.01)   lod1: one quad (2 triangles, error 0.5)
+//   ├── octant 0 "0": the left square  x in [0,1] (2 triangles, error 0)
+//   └── octant 1 "1": the right square x in [1,2] (2 triangles, error 0)
+//
+// The two children share the edge x = 1 with bit-identical vertices.
+NodeMesh square(float x0) {
+  NodeMesh m;
+  m.vertices = {x0, 0, 0, x0 + 1, 0, 0, x0 + 1, 1, 0, x0, 1, 0};
+  m.indices = {0, 1, 2, 0, 2, 3};
+  return m;
+}
+
+void write_tree(const fs::path& root) {
+  Manifest manifest;
+  auto add_lod = [&](NodeInfo& node, const NodeMesh& mesh, double error, const std::string& file) {
+    fs::create_directories((root / file).parent_path());
+    ASSERT_TRUE(write_node_file(root / file, mesh).ok());
+    node.lods.push_back({static_cast<std::uint32_t>(mesh.triangle_count()),
+                         static_cast<std::uint32_t>(mesh.vertex_count()), error,
+                         fs::file_size(root / file), file});
+    node.bounds.extend(mesh.bounds());
+  };
+  NodeMesh both = square(0.0f);  // root lod0: the two squares, shared edge welded
+  both.vertices.insert(both.vertices.end(), {2, 0, 0, 2, 1, 0});
+  both.indices.insert(both.indices.end(), {1, 4, 5, 1, 5, 2});
+  NodeMesh coarse;
+  coarse.vertices = {0, 0, 0, 2, 0, 0, 2, 1, 0, 0, 1, 0};
+  coarse.indices = {0, 1, 2, 0, 2, 3};
+  NodeInfo top;
+  top.cell = {{0, 0, 0}, {2, 2, 2}};
+  top.children[0] = 1;
+  top.children[1] = 2;
+  top.source_triangles = 4;
+  add_lod(top, both, 0.01, "lod0.olod");
+  add_lod(top, coarse, 0.5, "lod1.olod");
+  NodeInfo left;
+  left.path = "0";
+  left.depth = 1;
+  left.parent = 0;
+  left.cell = {{0, 0, 0}, {1, 1, 1}};
+  left.source_triangles = 2;
+  NodeInfo right = left;
+  right.path = "1";
+  right.cell = {{1, 0, 0}, {2, 1, 1}};
+  add_lod(left, square(0.0f), 0.0, "0/lod0.olod");
+  add_lod(right, square(1.0f), 0.0, "1/lod0.olod");
+  manifest.nodes = {top, left, right};
+  for (const NodeInfo& n : manifest.nodes) manifest.bounds.extend(n.bounds);
+  manifest.input_triangles = 4;
+  ASSERT_TRUE(write_manifest(root / std::string(kManifestFileName), manifest).ok());
+}
+
+TEST(ExtractCli, LevelZeroIsTheRootLod) {
+  SKIP_WITHOUT_CLI();
+  TempDir dir;
+  write_tree(dir / "tree");
+  const CliRun run = run_cli(dir, "--json extract " + (dir / "tree").string() + " --level 0 -o " +
+                                      (dir / "cut.ply").string());
+  ASSERT_EQ(run.code, 0) << run.err;
+  Result<NodeMesh> root = read_node_file(dir / "tree" / "lod0.olod");
+  ASSERT_TRUE(root.ok());
+  EXPECT_EQ(read_mesh(dir / "cut.ply"), root.value());
+  const json r = json::parse(run.out);
+  EXPECT_EQ(r["triangles"], 4);
+  EXPECT_EQ(r["node_lods"], 1);
+  EXPECT_EQ(r["lods"][0]["node"], "");
+  EXPECT_EQ(r["lods"][0]["lod"], 0);
+}
+
+TEST(ExtractCli, ErrorCutUsesOnlyLodsWithinTheTargetAndWeldsSeams) {
+  SKIP_WITHOUT_CLI();
+  TempDir dir;
+  write_tree(dir / "tree");
+  const std::string tree = (dir / "tree").string(), out = (dir / "cut.ply").string();
+  struct Case {
+    const char* error;
+    std::size_t triangles, vertices, open_edges;
+    double max_error;
+  };
+  // 0: the leaves, whose shared edge welds (8 -> 6 vertices; unwelded, the edge x = 1 would be
+  // two open edges); 0.1: root lod0; 1: root lod1. A 2x1 rectangle of 4 triangles has 6
+  // boundary edges, the single quad 4.
+  for (const Case& c :
+       {Case{"0", 4, 6, 6, 0.0}, Case{"0.1", 4, 6, 6, 0.01}, Case{"1", 2, 4, 4, 0.5}}) {
+    const CliRun run = run_cli(dir, std::string("--json extract ") + tree + " --error " + c.error +
+                                        " -o " + out + " --ascii");
+    ASSERT_EQ(run.code, 0) << run.err;
+    const json r = json::parse(run.out);
+    EXPECT_EQ(r["triangles"], c.triangles) << c.error;
+    EXPECT_EQ(r["vertices"], c.vertices) << c.error;
+    EXPECT_EQ(r["max_error"], c.max_error) << c.error;
+    EXPECT_LE(r["max_error"].get<double>(), std::stod(c.error));
+    const NodeMesh mesh = read_mesh(out);
+    EXPECT_EQ(mesh.triangle_count(), c.triangles);
+    EXPECT_EQ(mesh.vertex_count(), c.vertices);
+    EXPECT_EQ(open_edges(mesh), c.open_edges) << c.error;
+  }
+}
+
+TEST(ExtractCli, UsageAndBrokenTreeErrors) {
+  SKIP_WITHOUT_CLI();
+  TempDir dir;
+  const std::string tree = (dir / "tree").string(), out = (dir / "cut.ply").string();
+  EXPECT_EQ(run_cli(dir, "extract " + tree + " --level 0 -o " + out).code, 4);  // no manifest
+  write_tree(dir / "tree");
+  EXPECT_EQ(run_cli(dir, "extract " + tree + " -o " + out).code, 1);
+  EXPECT_EQ(run_cli(dir, "extract " + tree + " --error 1 --level 0 -o " + out).code, 1);
+  EXPECT_EQ(run_cli(dir, "extract " + tree + " --error -2 -o " + out).code, 1);
+  // a corrupted node file: bad input, named, and no output file
+  {
+    std::fstream f(dir / "tree" / "1" / "lod0.olod", std::ios::in | std::ios::out | std::ios::binary);
+    f.seekp(60);
+    f.put('\x7f');
+  }
+  const CliRun run = run_cli(dir, "extract " + tree + " --level 1 -o " + out);
+  EXPECT_EQ(run.code, 2);
+  EXPECT_NE(run.err.find("lod0.olod"), std::string::npos) << run.err;
+  EXPECT_FALSE(fs::exists(out));
+}
+
+// --- reference, compare (on a real bake of a sampled rock) -------------------------------------
+
+class BakedRock : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    if (std::getenv("OCTOLOD_CLI") == nullptr) GTEST_SKIP() << "OCTOLOD_CLI not set";
+    // positions only: the rock's uv-seam copies then weld, and the rock is closed
+    CliRun run = run_cli(dir_, "sample --shape rock --triangles 20000 --attributes none -o " +
+                                   input());
+    ASSERT_EQ(run.code, 0) << run.err;
+    run = run_cli(dir_, "bake " + input() + " -o " + tree() + " --max-tris 1500");
+    ASSERT_EQ(run.code, 0) << run.err;
+  }
+  std::string input() const { return (dir_ / "rock.ply").string(); }
+  std::string tree() const { return (dir_ / "tree").string(); }
+
+  TempDir dir_;
+};
+
+TEST_F(BakedRock, ReferenceReachesTheCountAndStaysClose) {
+  const std::string out = (dir_ / "ref.ply").string();
+  const CliRun run = run_cli(dir_, "--json reference " + input() + " --triangles 2000 -o " + out);
+  ASSERT_EQ(run.code, 0) << run.err;
+  const json r = json::parse(run.out);
+  EXPECT_EQ(r["input_triangles"], 20000);
+  EXPECT_LE(r["triangles"].get<int>(), 2000);
+  EXPECT_GE(r["triangles"].get<int>(), 1998);
+  const NodeMesh mesh = read_mesh(out);
+  EXPECT_EQ(json(mesh.triangle_count()), r["triangles"]);
+  EXPECT_EQ(open_edges(mesh), 0u);
+
+  const CliRun eval = run_cli(dir_, "--json eval " + input() + " " + out);
+  ASSERT_EQ(eval.code, 0) << eval.err;
+  const json e = json::parse(eval.out);
+  // 10% of the triangles of a smooth-ish rock: well under 1% of the diagonal on average
+  EXPECT_LT(e["two_sided"]["rms_relative"].get<double>(), 0.005);
+  EXPECT_GT(e["two_sided"]["rms_relative"].get<double>(), 0.0);
+
+  EXPECT_EQ(run_cli(dir_, "reference " + input() + " --triangles 0 -o " + out).code, 1);
+  EXPECT_EQ(run_cli(dir_, "reference " + (dir_ / "nope.ply").string() + " --triangles 9 -o " + out)
+                .code,
+            4);
+}
+
+TEST_F(BakedRock, CutsAtEveryStoredErrorAreClosed) {
+  Result<Manifest> manifest = read_manifest(fs::path(tree()) / std::string(kManifestFileName));
+  ASSERT_TRUE(manifest.ok());
+  std::vector<double> errors{0.0};
+  for (const NodeInfo& n : manifest->nodes)
+    for (const LodInfo& l : n.lods) errors.push_back(l.error);
+  std::sort(errors.begin(), errors.end());
+  errors.erase(std::unique(errors.begin(), errors.end()), errors.end());
+  const std::string out = (dir_ / "cut.ply").string();
+  // every distinct cut, up to 8 of them spread over the ladder
+  const std::size_t step = std::max<std::size_t>(1, errors.size() / 8);
+  for (std::size_t i = 0; i < errors.size(); i += step) {
+    std::ostringstream e;
+    e.precision(17);
+    e << errors[i];
+    const CliRun run = run_cli(dir_, "--json extract " + tree() + " --error " + e.str() + " -o " + out);
+    ASSERT_EQ(run.code, 0) << run.err;
+    const json r = json::parse(run.out);
+    for (const json& lod : r["lods"]) {
+      const auto node = std::find_if(manifest->nodes.begin(), manifest->nodes.end(),
+                                     [&](const NodeInfo& n) { return n.path == lod["node"]; });
+      ASSERT_NE(node, manifest->nodes.end());
+      const LodInfo& info = node->lods[lod["lod"].get<std::size_t>()];
+      EXPECT_TRUE(info.error <= errors[i] || (node->is_leaf() && lod["lod"] == 0));
+    }
+    const NodeMesh mesh = read_mesh(out);
+    EXPECT_EQ(json(mesh.triangle_count()), r["triangles"]);
+    EXPECT_EQ(open_edges(mesh), 0u) << "error " << errors[i];
+  }
+}
+
+TEST_F(BakedRock, CompareReportsEveryCutNextToTheReference) {
+  const CliRun run = run_cli(dir_, "--json compare " + input() + " " + tree() + " --samples 20000");
+  ASSERT_EQ(run.code, 0) << run.err;
+  const json r = json::parse(run.out);
+  EXPECT_EQ(r["input_triangles"], 20000);
+  ASSERT_FALSE(r["rows"].empty());
+  std::uint64_t previous = ~0ull;
+  for (const json& row : r["rows"]) {
+    const auto triangles = row["triangles"].get<std::uint64_t>();
+    EXPECT_LT(triangles, previous) << "rows go from fine to coarse, no repeats";
+    previous = triangles;
+    EXPECT_LE(row["stored_max_error"].get<double>(), row["error_target"].get<double>());
+    EXPECT_LE(row["reference_triangles"].get<std::uint64_t>(), triangles);
+    EXPECT_GE(row["reference_triangles"].get<std::uint64_t>() + 2, triangles);
+    EXPECT_DOUBLE_EQ(row["percent_of_input"].get<double>(), static_cast<double>(triangles) / 200.0);
+    // the Hausdorff distance bounds the RMS; the stored error bounds what the cut's samples see
+    // (one-sided, input -> cut)
+    EXPECT_LE(row["rms"].get<double>(), row["hausdorff"].get<double>());
+    EXPECT_LE(row["cut"]["a_to_b"]["max"].get<double>(),
+              row["stored_max_error"].get<double>() + 1e-6);
+    EXPECT_NEAR(row["rms_ratio"].get<double>(),
+                row["rms"].get<double>() / row["reference_rms"].get<double>(), 1e-9);
+  }
+
+  const CliRun markdown =
+      run_cli(dir_, "compare " + input() + " " + tree() + " --samples 5000 --markdown --errors 0");
+  ASSERT_EQ(markdown.code, 0) << markdown.err;
+  EXPECT_EQ(markdown.out.rfind("| error target | stored max | triangles |", 0), 0u) << markdown.out;
+  EXPECT_NE(markdown.out.find("| 0 | 0 | 20000 | 100.00 |"), std::string::npos) << markdown.out;
+}
+
+TEST_F(BakedRock, CompareRejectsAnInputTheTreeWasNotBakedFrom) {
+  write_mesh(dir_ / "other.ply", plane(3, 0.0f));
+  const CliRun run = run_cli(dir_, "compare " + (dir_ / "other.ply").string() + " " + tree());
+  EXPECT_EQ(run.code, 2);
+  EXPECT_NE(run.err.find("other.ply has 18 triangles, but the tree"), std::string::npos) << run.err;
+  EXPECT_EQ(run_cli(dir_, "compare " + input() + " " + tree() + " --errors 1,x").code, 1);
+  EXPECT_EQ(run_cli(dir_, "compare " + input() + " " + tree() + " --fractions 0").code, 1);
+  EXPECT_EQ(run_cli(dir_, "compare " + input() + " " + (dir_ / "none").string()).code, 4);
+}
+
+}  // namespace
+}  // namespace octolod

@@ -1,0 +1,268 @@
+// render_cli_tests: `octolod render` and `octolod walk --frames-png` write pictures of the cut the
+// streaming runtime selects, with every node tinted by its detail level. Runs the CLI built next
+// to the tests (OCTOLOD_CLI) on the synthetic tree of runtime_test_helpers.h written to disk, and
+// on a tree the CLI bakes from a generated rock.
+#include <gtest/gtest.h>
+
+#include <png.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <set>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "offscreen_renderer.h"
+#include "runtime_test_helpers.h"
+
+namespace octolod::cli {
+namespace {
+
+constexpr std::uint32_t kBackground = 0x20242c;  // RenderView's default
+
+struct Picture {
+  int width = 0;
+  int height = 0;
+  std::vector<std::uint8_t> rgb;
+  std::uint32_t get(int x, int y) const {
+    const std::size_t i = (static_cast<std::size_t>(y) * static_cast<std::size_t>(width) + static_cast<std::size_t>(x)) * 3;
+    return (std::uint32_t{rgb[i]} << 16) | (std::uint32_t{rgb[i + 1]} << 8) | rgb[i + 2];
+  }
+};
+
+Picture read_png(const std::filesystem::path& path) {
+  png_image image{};
+  image.version = PNG_IMAGE_VERSION;
+  Picture picture;
+  if (!png_image_begin_read_from_file(&image, path.c_str())) {
+    ADD_FAILURE() << path << ": " << image.message;
+    return picture;
+  }
+  image.format = PNG_FORMAT_RGB;
+  picture.width = static_cast<int>(image.width);
+  picture.height = static_cast<int>(image.height);
+  picture.rgb.resize(PNG_IMAGE_SIZE(image));
+  if (!png_image_finish_read(&image, nullptr, picture.rgb.data(), 0, nullptr)) {
+    ADD_FAILURE() << path << ": " << image.message;
+    picture = {};
+  }
+  return picture;
+}
+
+// Hue in degrees [0, 360) of an RGB colour; lighting scales all three channels alike, so a shaded
+// pixel keeps the hue of its material (up to rounding and clamping of bright pixels).
+double hue_degrees(double r, double g, double b) {
+  const double hi = std::max({r, g, b}), lo = std::min({r, g, b}), span = hi - lo;
+  if (span <= 0) return 0;
+  double h = 0;
+  if (hi == r) h = std::fmod((g - b) / span, 6.0);
+  else if (hi == g) h = (b - r) / span + 2.0;
+  else h = (r - g) / span + 4.0;
+  h *= 60.0;
+  return h < 0 ? h + 360.0 : h;
+}
+
+double hue_distance(double a, double b) {
+  const double d = std::abs(a - b);
+  return std::min(d, 360.0 - d);
+}
+
+// The material of a mesh without colours tinted for `level`: half grey 0.8, half tint
+// (offscreen_renderer's mix), as a hue.
+double level_hue(std::uint32_t level) {
+  const glm::vec3 c = 0.5f * glm::vec3(0.8f) + 0.5f * lod_tint(level);
+  return hue_degrees(c.r, c.g, c.b);
+}
+
+std::filesystem::path scratch_dir(const std::string& name) {
+  const auto dir = std::filesystem::temp_directory_path() /
+                   ("octolod_render_cli_test_" + name + "_" + std::to_string(::getpid()));
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  return dir;
+}
+
+struct CliRun {
+  int exit_code = -1;
+  nlohmann::json json;
+};
+
+// Runs `octolod <arguments>` with stdout captured; parses it as JSON when it is one.
+CliRun octolod(const std::string& arguments, const std::filesystem::path& dir) {
+  const auto out = dir / "stdout.txt";
+  const std::string command = std::string(std::getenv("OCTOLOD_CLI")) + " " + arguments + " > " + out.string() +
+                              " 2> " + (dir / "stderr.txt").string();
+  CliRun run;
+  const int status = std::system(command.c_str());
+  run.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  std::ifstream in(out);
+  run.json = nlohmann::json::parse(in, nullptr, false);
+  return run;
+}
+
+class RenderCli : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    const char* cli = std::getenv("OCTOLOD_CLI");
+    if (cli == nullptr || !std::filesystem::exists(cli)) GTEST_SKIP() << "OCTOLOD_CLI not built";
+  }
+};
+
+TEST_F(RenderCli, SyntheticTreeShowsOneTintPerDetailLevelAndNoOther) {
+  // The 3-level synthetic tree ([0,64]^3, 2 LODs per node, no vertex colours) seen by the default
+  // camera at 500 px: near leaves draw their original triangles (level 0), farther nodes coarser
+  // LODs, so the settled cut spans several detail levels.
+  const auto dir = scratch_dir("synthetic");
+  const runtime::testing::SyntheticTree tree = runtime::testing::make_full_octree(3);
+  runtime::testing::write_tree(tree, dir / "tree");
+  const auto png = dir / "frame.png";
+  const CliRun run = octolod("--json render " + (dir / "tree").string() + " --width 640 --height 500 -o " + png.string(), dir);
+  ASSERT_EQ(run.exit_code, 0);
+  ASSERT_TRUE(run.json.is_object());
+  EXPECT_TRUE(run.json.at("complete").get<bool>());
+  EXPECT_EQ(run.json.at("fallbacks"), 0);
+  EXPECT_EQ(run.json.at("loads_failed"), 0);
+
+  // the histogram accounts for every drawn node and triangle
+  std::set<std::uint32_t> levels;
+  std::uint64_t nodes = 0, triangles = 0;
+  for (const nlohmann::json& level : run.json.at("lod_histogram")) {
+    levels.insert(level.at("level").get<std::uint32_t>());
+    nodes += level.at("nodes").get<std::uint64_t>();
+    triangles += level.at("triangles").get<std::uint64_t>();
+  }
+  EXPECT_EQ(nodes, run.json.at("nodes_drawn").get<std::uint64_t>());
+  EXPECT_EQ(triangles, run.json.at("triangles").get<std::uint64_t>());
+  ASSERT_GE(levels.size(), 2u) << run.json.dump();
+
+  // every lit pixel has the hue of a level in the histogram; at least two levels are visible
+  const Picture picture = read_png(png);
+  ASSERT_EQ(picture.width, 640);
+  ASSERT_EQ(picture.height, 500);
+  std::map<std::uint32_t, int> pixels_per_level;
+  int lit = 0, unexplained = 0;
+  for (int y = 0; y < picture.height; ++y)
+    for (int x = 0; x < picture.width; ++x) {
+      const std::uint32_t p = picture.get(x, y);
+      if (p == kBackground) continue;
+      ++lit;
+      const double hue = hue_degrees((p >> 16) & 0xFF, (p >> 8) & 0xFF, p & 0xFF);
+      std::uint32_t best = 0;
+      double best_distance = 1e9;
+      for (std::uint32_t level = 0; level < 8; ++level)
+        if (hue_distance(hue, level_hue(level)) < best_distance) {
+          best_distance = hue_distance(hue, level_hue(level));
+          best = level;
+        }
+      if (best_distance > 10.0 || levels.count(best) == 0) ++unexplained;
+      else ++pixels_per_level[best];
+    }
+  EXPECT_GT(lit, 1000);
+  EXPECT_LT(unexplained, lit / 100) << "pixels whose hue is no drawn level's tint";
+  int visible_levels = 0;
+  std::string seen;
+  for (const auto& [level, count] : pixels_per_level) {
+    visible_levels += count >= 50 ? 1 : 0;
+    seen += " level " + std::to_string(level) + ": " + std::to_string(count) + " px;";
+  }
+  EXPECT_GE(visible_levels, 2) << seen << " of " << lit << " lit, " << unexplained << " unexplained";
+  std::filesystem::remove_all(dir);
+}
+
+TEST_F(RenderCli, BakedRockIsDrawnAndEveryDrawnTriangleIsCounted) {
+  const auto dir = scratch_dir("rock");
+  ASSERT_EQ(octolod("sample --shape rock --triangles 20000 -o " + (dir / "rock.ply").string(), dir).exit_code, 0);
+  ASSERT_EQ(octolod("bake " + (dir / "rock.ply").string() + " -o " + (dir / "rock").string() + " --memory 64M", dir)
+                .exit_code,
+            0);
+  const auto png = dir / "rock.png";
+  const CliRun run = octolod("--json render " + (dir / "rock").string() + " --width 320 --height 240 -o " + png.string(), dir);
+  ASSERT_EQ(run.exit_code, 0);
+  EXPECT_TRUE(run.json.at("complete").get<bool>());
+  EXPECT_EQ(run.json.at("fallbacks"), 0);
+  EXPECT_GT(run.json.at("triangles").get<std::uint64_t>(), 0u);
+
+  // The default camera frames the whole rock: it covers a good part of the picture, and none of
+  // it touches the border (nothing clipped).
+  const Picture picture = read_png(png);
+  ASSERT_EQ(picture.width, 320);
+  int lit = 0, border = 0;
+  for (int y = 0; y < picture.height; ++y)
+    for (int x = 0; x < picture.width; ++x) {
+      if (picture.get(x, y) == kBackground) continue;
+      ++lit;
+      border += (x == 0 || y == 0 || x == picture.width - 1 || y == picture.height - 1) ? 1 : 0;
+    }
+  EXPECT_GT(lit, picture.width * picture.height / 10);
+  EXPECT_EQ(border, 0);
+  std::filesystem::remove_all(dir);
+}
+
+TEST_F(RenderCli, MalformedCameraIsAUsageErrorAndWritesNothing) {
+  const auto dir = scratch_dir("usage");
+  runtime::testing::write_tree(runtime::testing::make_full_octree(2), dir / "tree");
+  const auto png = dir / "frame.png";
+  for (const char* camera : {"1,2,3", "1,2,3,4,5,x", "1,1,1,1,1,1"}) {
+    EXPECT_EQ(octolod("render " + (dir / "tree").string() + " --camera " + camera + " -o " + png.string(), dir).exit_code, 1)
+        << camera;
+    EXPECT_FALSE(std::filesystem::exists(png)) << camera;
+  }
+  EXPECT_EQ(octolod("render " + (dir / "missing").string() + " -o " + png.string(), dir).exit_code, 4);
+  EXPECT_FALSE(std::filesystem::exists(png));
+  std::filesystem::remove_all(dir);
+}
+
+TEST_F(RenderCli, ExplicitCameraLooksWhereItIsTold) {
+  // Looking away from the tree shows only background; looking at it shows it.
+  const auto dir = scratch_dir("camera");
+  runtime::testing::write_tree(runtime::testing::make_full_octree(3), dir / "tree");
+  const auto away = dir / "away.png", at = dir / "at.png";
+  ASSERT_EQ(octolod("--json render " + (dir / "tree").string() + " --camera 32,32,200,32,32,400 --width 64 --height 64 -o " +
+                        away.string(),
+                    dir)
+                .exit_code,
+            0);
+  const CliRun looked_at = octolod("--json render " + (dir / "tree").string() +
+                                    " --camera 32,32,200,32,32,32 --width 64 --height 64 -o " + at.string(),
+                                dir);
+  ASSERT_EQ(looked_at.exit_code, 0);
+  EXPECT_GT(looked_at.json.at("nodes_drawn").get<int>(), 0);
+  auto lit_pixels = [](const Picture& p) {
+    int lit = 0;
+    for (int y = 0; y < p.height; ++y)
+      for (int x = 0; x < p.width; ++x) lit += p.get(x, y) != kBackground ? 1 : 0;
+    return lit;
+  };
+  EXPECT_EQ(lit_pixels(read_png(away)), 0);
+  EXPECT_GT(lit_pixels(read_png(at)), 0);
+  std::filesystem::remove_all(dir);
+}
+
+TEST_F(RenderCli, WalkFramesPngWritesEveryKthFrame) {
+  const auto dir = scratch_dir("walk");
+  runtime::testing::write_tree(runtime::testing::make_full_octree(3), dir / "tree");
+  const auto frames = dir / "frames";
+  const CliRun run = octolod("--json walk " + (dir / "tree").string() +
+                              " --path orbit --frames 25 --fps 0 --budget 1M --frames-png " + frames.string() +
+                              " --frames-png-every 10",
+                          dir);
+  ASSERT_EQ(run.exit_code, 0);
+  EXPECT_EQ(run.json.at("frames_png"), 3);
+  std::set<std::string> names;
+  for (const auto& entry : std::filesystem::directory_iterator(frames)) names.insert(entry.path().filename().string());
+  EXPECT_EQ(names, (std::set<std::string>{"frame_000000.png", "frame_000010.png", "frame_000020.png"}));
+  const Picture last = read_png(frames / "frame_000020.png");
+  EXPECT_EQ(last.width, 960);
+  EXPECT_EQ(last.height, 540);
+  std::filesystem::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace octolod::cli
