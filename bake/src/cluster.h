@@ -32,7 +32,7 @@ ClusteredMesh cluster_grid(const PreparedNode& node, std::uint32_t g);
 // coincide after rounding), without solving any quadric: what the resolution search evaluates.
 std::size_t count_grid_triangles(const PreparedNode& node, std::uint32_t g);
 // The resolution whose output has at most `target` triangles and is as fine as a short search
-// finds (at most 8 counts; it stops within 15% below the target; the count is nearly but not
+// finds (at most 12 counts; it stops within 15% below the target; the count is nearly but not
 // exactly monotone in g); 1 when even g = 1 exceeds it.
 std::uint32_t choose_grid_resolution(const PreparedNode& node, std::size_t target);
 

@@ -21,6 +21,7 @@ constexpr std::uint64_t kLockedKey = 1ull << 63;
 
 struct GridDomain {
   std::array<double, 3> min;  // local coordinates (relative to PreparedNode::origin)
+  std::array<double, 3> max;
   double cell_size;
   std::array<std::uint32_t, 3> dims;
 };
@@ -32,6 +33,7 @@ GridDomain make_domain(const PreparedNode& node, std::uint32_t g) {
   double side = 0.0;
   for (std::size_t i = 0; i < 3; ++i) {
     grid.min[i] = static_cast<double>(domain.min[i]) - node.origin[i];
+    grid.max[i] = static_cast<double>(domain.max[i]) - node.origin[i];
     side = std::max(side, static_cast<double>(domain.max[i]) - domain.min[i]);
   }
   grid.cell_size = side > 0.0 ? side / g : 1.0;
@@ -138,8 +140,9 @@ std::uint32_t choose_grid_resolution(const PreparedNode& node, std::size_t targe
   // Triangles grow about like g^2 on a surface. First guess from the area: a surface crosses
   // about 1.5 A / s^2 cubes of side s, and a closed mesh has about 2 triangles per vertex.
   // Then power-law corrections through the last count, keeping a feasible lower and an
-  // infeasible upper end; stop once the count is within 15% below the target.
-  if (count_grid_triangles(node, 1) > target) return 1;
+  // infeasible upper end; stop once the count is within 15% below the target (at most 12 counts).
+  const std::size_t coarsest = count_grid_triangles(node, 1);
+  if (coarsest > target) return 1;
   constexpr std::uint32_t kMaxResolution = 1u << 16;
   Bounds domain = node.cell;
   domain.extend(node.mesh_bounds);
@@ -150,20 +153,28 @@ std::uint32_t choose_grid_resolution(const PreparedNode& node, std::size_t targe
   double guess = area > 0.0 ? side * std::sqrt(static_cast<double>(target) / (3.0 * area)) : 8.0;
   std::uint32_t lo = 1, hi = kMaxResolution + 1;
   std::uint32_t g = static_cast<std::uint32_t>(std::clamp(guess, 2.0, static_cast<double>(kMaxResolution)));
-  for (int evaluation = 0; evaluation < 8 && hi - lo > 1; ++evaluation) {
+  // the feasible resolution with the most triangles so far: counts are not monotone in g (a
+  // grid aligned with a city's lots collapses every box into a column of cells)
+  std::uint32_t best = 1;
+  std::size_t best_count = coarsest;
+  for (int evaluation = 0; evaluation < 12 && hi - lo > 1; ++evaluation) {
     g = std::clamp(g, lo + 1, hi - 1);
     const std::size_t count = count_grid_triangles(node, g);
     if (count <= target) lo = g;
     else hi = g;
+    if (count <= target && count > best_count) best = g, best_count = count;
     if (count <= target && (count >= node.mesh.triangle_count() || static_cast<double>(count) >= 0.85 * static_cast<double>(target)))
       break;  // close enough, or nothing left to merge
-    const double ratio = count > 0 ? std::sqrt(0.95 * static_cast<double>(target) / static_cast<double>(count)) : 4.0;
+    // over the target: at least 15% coarser per step (counts with a large fixed part, locked
+    // boundaries or many small parts, fall slower than g^2)
+    double ratio = count > 0 ? std::sqrt(0.95 * static_cast<double>(target) / static_cast<double>(count)) : 4.0;
+    if (count > target) ratio = std::min(ratio, 0.85);
     const double next = std::clamp(static_cast<double>(g) * ratio, static_cast<double>(g) / 4.0,
                                    static_cast<double>(g) * 4.0);
     g = static_cast<std::uint32_t>(std::lround(next));
     if (g <= lo || g >= hi) g = lo + (hi - lo) / 2;  // the model stalled: bisect
   }
-  return lo;
+  return best;
 }
 
 ClusteredMesh cluster_grid(const PreparedNode& node, std::uint32_t g) {
@@ -182,8 +193,9 @@ ClusteredMesh cluster_grid(const PreparedNode& node, std::uint32_t g) {
     for (std::size_t i = 3; i-- > 0;) {
       const auto index = static_cast<double>(rest % grid.dims[i]);
       rest /= grid.dims[i];
+      // the cubic cell, cut to the domain (the last cell along an axis may stick out of it)
       clustering.box[c].min[i] = grid.min[i] + index * grid.cell_size;
-      clustering.box[c].max[i] = grid.min[i] + (index + 1.0) * grid.cell_size;
+      clustering.box[c].max[i] = std::min(grid.min[i] + (index + 1.0) * grid.cell_size, grid.max[i]);
     }
   }
   return build_clustered_mesh(node.mesh, clustering, node.origin);

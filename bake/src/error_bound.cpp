@@ -7,7 +7,9 @@
 // of t is far above the distances of its corners (t spans a ridge of the output, say), t is split
 // in four (midpoints) and the bound is the max over the parts, a few levels deep. Only triangles
 // whose bound exceeds the best total so far are refined — the total is a max — so the cost is a
-// little more than one BVH query per input vertex.
+// little more than one BVH query per input vertex. With the hints of a vertex clustering
+// (error_bound.h, ImageHints) the candidates come from the clustering instead and the queries
+// are only the fallback.
 #include "error_bound.h"
 
 #include <algorithm>
@@ -205,51 +207,86 @@ double bvh_bound(const NodeMesh& input, const NodeMesh& output, const std::vecto
 
 }  // namespace
 
-double hausdorff_upper_bound(const NodeMesh& input, const NodeMesh& output,
-                             std::span<const std::uint32_t> nearby_output_triangle) {
+double hausdorff_upper_bound(const NodeMesh& input, const NodeMesh& output, const ImageHints& hints) {
   if (input.triangle_count() == 0) return 0.0;
   if (output.triangle_count() == 0) return std::numeric_limits<double>::infinity();
   const std::size_t in_stride = input.layout.floats();
   const std::size_t out_stride = output.layout.floats();
-  auto output_corner = [&](std::uint32_t triangle, std::size_t k) {
-    const float* f = &output.vertices[output.indices[3 * std::size_t{triangle} + k] * out_stride];
+  const bool have_fans = !hints.vertex_cluster.empty() && !hints.fan_offset.empty();
+  auto input_position = [&](std::uint32_t v) {
+    const float* f = &input.vertices[v * in_stride];
     return Vec{f[0], f[1], f[2]};
   };
-
-  // triangles with a hint: max over their corners of the distance to the hinted triangle (the
-  // distance to a fixed triangle is convex, so its max over the input triangle is at a corner)
-  double total = 0.0;
-  std::vector<std::uint32_t> unhinted;
-  for (std::size_t t = 0; t < input.triangle_count(); ++t) {
-    const std::uint32_t hint = nearby_output_triangle.empty() ? kNoHint : nearby_output_triangle[t];
-    if (hint == kNoHint || hint >= output.triangle_count()) {
-      unhinted.push_back(static_cast<std::uint32_t>(t));
-      continue;
-    }
-    const Vec a = output_corner(hint, 0);
-    Vec b{}, c{};
-    bool have_triangle = false;
+  auto output_triangle = [&](std::uint32_t triangle) {
+    std::array<Vec, 3> corners;
     for (std::size_t k = 0; k < 3; ++k) {
-      const float* f = &input.vertices[input.indices[3 * t + k] * in_stride];
-      const Vec p{f[0], f[1], f[2]};
-      // |p - a| bounds the distance from above: skip the exact distance when it cannot raise
-      // the total
-      const Vec pa = sub(p, a);
-      if (dot(pa, pa) <= total * total) continue;
-      if (!have_triangle) {
-        b = output_corner(hint, 1);
-        c = output_corner(hint, 2);
-        have_triangle = true;
+      const float* f = &output.vertices[output.indices[3 * std::size_t{triangle} + k] * out_stride];
+      corners[k] = {f[0], f[1], f[2]};
+    }
+    return corners;
+  };
+  auto fan = [&](std::uint32_t v) {
+    const std::uint32_t c = hints.vertex_cluster[v];
+    return hints.fan_triangle.subspan(hints.fan_offset[c], hints.fan_offset[c + 1] - hints.fan_offset[c]);
+  };
+
+  // a first total: every input vertex's distance to the nearest triangle of its cluster's fan
+  // (each is the bound of a degenerate triangle, so the final total is at least their max, and
+  // a high total early lets most triangles below skip their exact distances)
+  double total = 0.0;
+  if (have_fans) {
+    for (std::uint32_t v = 0; v < input.vertex_count(); ++v) {
+      double best = std::numeric_limits<double>::infinity();
+      const Vec p = input_position(v);
+      for (std::uint32_t triangle : fan(v)) {
+        const auto t = output_triangle(triangle);
+        best = std::min(best, point_triangle_distance(p, t[0], t[1], t[2]));
       }
-      total = std::max(total, point_triangle_distance(p, a, b, c));
+      if (best < std::numeric_limits<double>::infinity()) total = std::max(total, best);
     }
   }
-  if (!unhinted.empty()) total = bvh_bound(input, output, unhinted, total);
+
+  std::vector<std::uint32_t> unresolved;
+  for (std::size_t t = 0; t < input.triangle_count(); ++t) {
+    const std::uint32_t* corner = &input.indices[3 * t];
+    const std::array<Vec, 3> p{input_position(corner[0]), input_position(corner[1]), input_position(corner[2])};
+    // max over the corners of the distance to output triangle `candidate`; stops early once it
+    // reaches `enough` (then returns a value >= enough, only good for taking a minimum)
+    auto corner_bound = [&](std::uint32_t candidate, double enough) {
+      const auto tri = output_triangle(candidate);
+      double worst = 0.0;
+      for (const Vec& x : p) {
+        const Vec xa = sub(x, tri[0]);
+        if (dot(xa, xa) <= worst * worst) continue;  // |x - a| bounds dist(x, T) from above
+        worst = std::max(worst, point_triangle_distance(x, tri[0], tri[1], tri[2]));
+        if (worst >= enough) break;
+      }
+      return worst;
+    };
+    const std::uint32_t hint = hints.nearby_output_triangle.empty() ? kNoHint : hints.nearby_output_triangle[t];
+    double best = std::numeric_limits<double>::infinity();
+    if (hint != kNoHint && hint < output.triangle_count()) {
+      best = corner_bound(hint, std::numeric_limits<double>::infinity());
+      if (best <= total) continue;
+    }
+    if (have_fans) {
+      for (std::uint32_t v : {corner[0], corner[1], corner[2]}) {
+        for (std::uint32_t candidate : fan(v)) {
+          best = std::min(best, corner_bound(candidate, best));
+          if (best <= total) break;
+        }
+        if (best <= total) break;
+      }
+    }
+    if (best == std::numeric_limits<double>::infinity()) unresolved.push_back(static_cast<std::uint32_t>(t));
+    else total = std::max(total, best);
+  }
+  if (!unresolved.empty()) total = bvh_bound(input, output, unresolved, total);
   return total * (1.0 + 1e-6);
 }
 
 double hausdorff_upper_bound(const NodeMesh& input, const NodeMesh& output) {
-  return hausdorff_upper_bound(input, output, {});
+  return hausdorff_upper_bound(input, output, ImageHints{});
 }
 
 }  // namespace octolod::bake

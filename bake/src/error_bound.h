@@ -16,14 +16,25 @@ namespace octolod::bake {
 // Closest-point queries (measure::TriangleBvh) for every input vertex, refinement where needed.
 double hausdorff_upper_bound(const NodeMesh& input, const NodeMesh& output);
 
-// The same, much faster when a simplification knows where each input triangle went:
-// `nearby_output_triangle[t]` is an output triangle near the image of input triangle t (or
-// 0xFFFFFFFF: none). For a fixed output triangle T the distance x -> dist(x, T) is convex, so
-// max over corners of dist(corner, T) bounds dist(x, output) over the whole input triangle;
-// three point-triangle distances per input triangle replace the queries, which only the
-// triangles without a hint still need. Exactly as conservative; as tight as the hints are good
-// (the image of a triangle that survived clustering is the natural choice). Empty span: no hints.
-double hausdorff_upper_bound(const NodeMesh& input, const NodeMesh& output,
-                             std::span<const std::uint32_t> nearby_output_triangle);
+// Where a vertex clustering sent the input (all spans index the input / output meshes given
+// with them; empty spans = unknown).
+struct ImageHints {
+  // Per input triangle: an output triangle at or next to its image, or 0xFFFFFFFF.
+  std::span<const std::uint32_t> nearby_output_triangle;
+  // Per input vertex: its cluster. Per cluster c: the output triangles with a corner at c's
+  // representative are fan_triangle[fan_offset[c] .. fan_offset[c+1]).
+  std::span<const std::uint32_t> vertex_cluster;
+  std::span<const std::uint32_t> fan_offset;
+  std::span<const std::uint32_t> fan_triangle;
+};
+
+// The same bound, much faster with hints: for a fixed output triangle T, x -> dist(x, T) is
+// convex, so max over t's corners of dist(corner, T) bounds dist(x, output) on all of input
+// triangle t, for ANY T. Candidates T come from the hints instead of closest-point queries: the
+// triangle's image first; when that does not settle it, the fans around its corners' clusters
+// (where the nearest output triangles of its corners nearly always are); the BVH only for
+// triangles with no candidate. Exactly as conservative; about as tight as the query version
+// without refinement.
+double hausdorff_upper_bound(const NodeMesh& input, const NodeMesh& output, const ImageHints& hints);
 
 }  // namespace octolod::bake

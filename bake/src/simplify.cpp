@@ -66,7 +66,7 @@ Result<SimplifyResult> simplify_node(const NodeMesh& input, const Bounds& cell,
                                 : options.grid_resolution;
     ClusteredMesh clustered = cluster_grid(node, g);
     result.mesh = std::move(clustered.mesh);
-    result.error_bound = hausdorff_upper_bound(node.mesh, result.mesh, clustered.nearby_output_triangle);
+    result.error_bound = hausdorff_upper_bound(node.mesh, result.mesh, clustered.hints());
     return result;
   }
   result.error_bound = hausdorff_upper_bound(node.mesh, result.mesh);

@@ -334,6 +334,14 @@ ClusteredMesh build_clustered_mesh(const NodeMesh& mesh, const Clustering& clust
   for (std::size_t i = 0; i < kept.size(); ++i) kept_cluster[i] = static_cast<std::uint32_t>(order[kept[i]] >> 32);
   result.nearby_output_triangle = nearby_output_triangles(mesh, cluster, clustering.count, kept_cluster,
                                                           candidate_of_triangle, output_of_candidate);
+  result.vertex_cluster = cluster;
+  result.fan_offset.assign(std::size_t{clustering.count} + 1, 0);
+  for (std::uint32_t c : kept_cluster) ++result.fan_offset[c + 1];
+  for (std::size_t c = 0; c < clustering.count; ++c) result.fan_offset[c + 1] += result.fan_offset[c];
+  result.fan_triangle.resize(kept_cluster.size());
+  std::vector<std::uint32_t> fill(result.fan_offset.begin(), result.fan_offset.end() - 1);
+  for (std::size_t i = 0; i < kept_cluster.size(); ++i)
+    result.fan_triangle[fill[kept_cluster[i]]++] = static_cast<std::uint32_t>(i / 3);
   return result;
 }
 

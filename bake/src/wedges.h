@@ -13,6 +13,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "error_bound.h"
 #include "octolod/formats/node_file.h"
 
 namespace octolod::bake {
@@ -53,6 +54,14 @@ struct ClusteredMesh {
   // survived, else one sharing an image edge, else one at an image vertex), kNoTriangle when
   // there is none. Only a hint for hausdorff_upper_bound: any output triangle gives a valid bound.
   std::vector<std::uint32_t> nearby_output_triangle;
+  // The fan of every cluster: the output triangles with a corner at it (CSR: fan_triangle
+  // [fan_offset[c], fan_offset[c+1])), and each input vertex's cluster: where the error bound
+  // looks for the output triangles nearest an input vertex.
+  std::vector<std::uint32_t> vertex_cluster;
+  std::vector<std::uint32_t> fan_offset;
+  std::vector<std::uint32_t> fan_triangle;
+
+  ImageHints hints() const { return {nearby_output_triangle, vertex_cluster, fan_offset, fan_triangle}; }
 };
 ClusteredMesh build_clustered_mesh(const NodeMesh& mesh, const Clustering& clustering,
                                    const std::array<double, 3>& origin);

@@ -1,0 +1,753 @@
+// Per-node simplification (bake/include/octolod/bake/simplify.h; seed 3.5, 4.4, 3.5.3):
+// generalized quadrics, locked boundary edges, the grid and bade2006 clusterings, wedges at
+// attribute seams, conservative error bounds and LOD chains.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstring>
+#include <functional>
+#include <limits>
+#include <map>
+#include <set>
+#include <thread>
+#include <vector>
+
+#include "boundary_edges.h"
+#include "octolod/bake/simplify.h"
+#include "octolod/measure/metro.h"
+#include "octolod/measure/triangle_bvh.h"
+#include "octolod/samplegen/sample_generator.h"
+#include "quadric.h"
+
+namespace octolod::bake {
+namespace {
+
+// ---- fixtures -------------------------------------------------------------------------------
+
+NodeMesh make_sample(samplegen::Shape shape, std::uint64_t triangles, VertexLayout layout = {true, true, true}) {
+  samplegen::SampleSpec spec;
+  spec.shape = shape;
+  spec.triangles = triangles;
+  spec.layout = layout;
+  auto stream = samplegen::SampleStream::create(spec);
+  EXPECT_TRUE(stream.ok());
+  NodeMesh mesh;
+  mesh.layout = layout;
+  for (;;) {
+    const samplegen::SampleBatch batch = stream.value()->next();
+    if (batch.kind == samplegen::SampleBatch::Kind::end) break;
+    mesh.vertices.insert(mesh.vertices.end(), batch.vertices.begin(), batch.vertices.end());
+    mesh.indices.insert(mesh.indices.end(), batch.triangles.begin(), batch.triangles.end());
+  }
+  return mesh;
+}
+
+// A node: some triangles of a mesh (vertices compacted) and its octree cell.
+struct Node {
+  NodeMesh mesh;
+  Bounds cell;
+};
+
+// The triangles of `mesh` whose centroid satisfies `keep`.
+NodeMesh select_triangles(const NodeMesh& mesh, const std::function<bool(const float*)>& keep) {
+  const std::size_t stride = mesh.layout.floats();
+  NodeMesh out;
+  out.layout = mesh.layout;
+  std::vector<std::uint32_t> remap(mesh.vertex_count(), std::numeric_limits<std::uint32_t>::max());
+  for (std::size_t t = 0; t < mesh.triangle_count(); ++t) {
+    float centroid[3] = {0, 0, 0};
+    for (std::size_t k = 0; k < 3; ++k)
+      for (std::size_t i = 0; i < 3; ++i) centroid[i] += mesh.vertices[mesh.indices[3 * t + k] * stride + i] / 3.0f;
+    if (!keep(centroid)) continue;
+    for (std::size_t k = 0; k < 3; ++k) {
+      const std::uint32_t v = mesh.indices[3 * t + k];
+      if (remap[v] == std::numeric_limits<std::uint32_t>::max()) {
+        remap[v] = static_cast<std::uint32_t>(out.vertex_count());
+        out.vertices.insert(out.vertices.end(), mesh.vertices.begin() + static_cast<std::ptrdiff_t>(v * stride),
+                            mesh.vertices.begin() + static_cast<std::ptrdiff_t>((v + 1) * stride));
+      }
+      out.indices.push_back(remap[v]);
+    }
+  }
+  return out;
+}
+
+// The two halves of `mesh` cut at x = split (by centroid), with the two halves of `cell`.
+std::array<Node, 2> split_at_x(const NodeMesh& mesh, const Bounds& cell, float split) {
+  std::array<Node, 2> halves;
+  halves[0].mesh = select_triangles(mesh, [split](const float* c) { return c[0] < split; });
+  halves[1].mesh = select_triangles(mesh, [split](const float* c) { return c[0] >= split; });
+  halves[0].cell = halves[1].cell = cell;
+  halves[0].cell.max[0] = split;
+  halves[1].cell.min[0] = split;
+  return halves;
+}
+
+// A (cells x cells) grid of quads on z = 0 over [0,1]^2; attributes linear in x,y: normal
+// (0,0,1), colour (0.2 + 0.5x, 0.3 + 0.4y, 0.5), uv = (x, y).
+NodeMesh plane_grid(int cells, VertexLayout layout = {true, true, true}) {
+  NodeMesh mesh;
+  mesh.layout = layout;
+  for (int j = 0; j <= cells; ++j) {
+    for (int i = 0; i <= cells; ++i) {
+      const float x = static_cast<float>(i) / static_cast<float>(cells);
+      const float y = static_cast<float>(j) / static_cast<float>(cells);
+      mesh.vertices.insert(mesh.vertices.end(), {x, y, 0.0f});
+      if (layout.normal) mesh.vertices.insert(mesh.vertices.end(), {0.0f, 0.0f, 1.0f});
+      if (layout.color) mesh.vertices.insert(mesh.vertices.end(), {0.2f + 0.5f * x, 0.3f + 0.4f * y, 0.5f});
+      if (layout.uv) mesh.vertices.insert(mesh.vertices.end(), {x, y});
+    }
+  }
+  const auto id = [cells](int i, int j) { return static_cast<std::uint32_t>(j * (cells + 1) + i); };
+  for (int j = 0; j < cells; ++j)
+    for (int i = 0; i < cells; ++i)
+      mesh.indices.insert(mesh.indices.end(), {id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j), id(i + 1, j + 1), id(i, j + 1)});
+  return mesh;
+}
+
+//   A roof whose ridge (x = 0, z = 1) lies far above the mesh: two strips, x in [-2,-1.6] and
+//   [1.6,2], y in [0,1], on the planes z = 1 - |x|/2 (so z in [0, 0.2]); 4 x 4 quads each, so
+//   each strip has 3 x 3 interior vertices. The quadric optimum of the whole is on the ridge.
+//        ridge (outside the cell)
+//          /\ .
+//         /  \ .
+//   ___ /      \ ___ .  <- only these outer strips are meshed
+NodeMesh roof() {
+  NodeMesh mesh;
+  for (const float side : {-1.0f, 1.0f}) {
+    const auto base = static_cast<std::uint32_t>(mesh.vertex_count());
+    for (int j = 0; j <= 4; ++j) {
+      for (int i = 0; i <= 4; ++i) {
+        const float x = side * (1.6f + 0.1f * static_cast<float>(i));
+        mesh.vertices.insert(mesh.vertices.end(), {x, 0.25f * static_cast<float>(j), 1.0f - 0.5f * std::fabs(x)});
+      }
+    }
+    const auto id = [base](int i, int j) { return base + static_cast<std::uint32_t>(j * 5 + i); };
+    for (int j = 0; j < 4; ++j)
+      for (int i = 0; i < 4; ++i)
+        mesh.indices.insert(mesh.indices.end(), {id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j), id(i + 1, j + 1), id(i, j + 1)});
+  }
+  return mesh;
+}
+
+// ---- mesh inspection --------------------------------------------------------------------------
+
+using PositionKey = std::array<std::uint32_t, 3>;
+using EdgeKey = std::array<PositionKey, 2>;
+
+PositionKey position_key(const NodeMesh& mesh, std::uint32_t v) {
+  PositionKey key;
+  std::memcpy(key.data(), &mesh.vertices[v * mesh.layout.floats()], sizeof key);
+  return key;
+}
+
+// Edges (keyed on positions, unordered) used by an odd number of triangles: the open edges.
+std::set<EdgeKey> odd_edges(const NodeMesh& mesh) {
+  std::map<EdgeKey, int> uses;
+  for (std::size_t c = 0; c < mesh.indices.size(); ++c) {
+    const std::size_t next = c % 3 == 2 ? c - 2 : c + 1;
+    PositionKey a = position_key(mesh, mesh.indices[c]), b = position_key(mesh, mesh.indices[next]);
+    if (a == b) continue;
+    if (b < a) std::swap(a, b);
+    ++uses[{a, b}];
+  }
+  std::set<EdgeKey> odd;
+  for (const auto& [edge, count] : uses)
+    if (count % 2 == 1) odd.insert(edge);
+  return odd;
+}
+
+std::vector<float> vertex_record(const NodeMesh& mesh, std::uint32_t v) {
+  const std::size_t stride = mesh.layout.floats();
+  return {mesh.vertices.begin() + static_cast<std::ptrdiff_t>(v * stride),
+          mesh.vertices.begin() + static_cast<std::ptrdiff_t>((v + 1) * stride)};
+}
+
+std::array<double, 3> face_normal(const NodeMesh& mesh, std::size_t t) {
+  const std::size_t stride = mesh.layout.floats();
+  const float* p[3];
+  for (std::size_t k = 0; k < 3; ++k) p[k] = &mesh.vertices[mesh.indices[3 * t + k] * stride];
+  const double e1[3] = {double(p[1][0]) - p[0][0], double(p[1][1]) - p[0][1], double(p[1][2]) - p[0][2]};
+  const double e2[3] = {double(p[2][0]) - p[0][0], double(p[2][1]) - p[0][1], double(p[2][2]) - p[0][2]};
+  return {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
+}
+
+// The invariants every simplification output must have (simplify.h, SimplifyResult::mesh).
+void expect_clean(const NodeMesh& mesh) {
+  const VertexLayout layout = mesh.layout;
+  const std::size_t stride = layout.floats();
+  for (std::size_t v = 0; v < mesh.vertex_count(); ++v) {
+    const float* f = &mesh.vertices[v * stride];
+    if (layout.normal) {
+      const double length = std::sqrt(double(f[3]) * f[3] + double(f[4]) * f[4] + double(f[5]) * f[5]);
+      ASSERT_NEAR(length, 1.0, 1e-5) << "vertex " << v;
+    }
+    if (layout.color)
+      for (std::size_t i = 0; i < 3; ++i) {
+        ASSERT_GE(f[layout.color_offset() + i], 0.0f);
+        ASSERT_LE(f[layout.color_offset() + i], 1.0f);
+      }
+  }
+  std::set<std::array<PositionKey, 3>> seen;
+  for (std::size_t t = 0; t < mesh.triangle_count(); ++t) {
+    std::array<PositionKey, 3> corners{position_key(mesh, mesh.indices[3 * t]), position_key(mesh, mesh.indices[3 * t + 1]),
+                                       position_key(mesh, mesh.indices[3 * t + 2])};
+    ASSERT_NE(corners[0], corners[1]) << "degenerate triangle " << t;
+    ASSERT_NE(corners[1], corners[2]) << "degenerate triangle " << t;
+    ASSERT_NE(corners[0], corners[2]) << "degenerate triangle " << t;
+    std::sort(corners.begin(), corners.end());
+    ASSERT_TRUE(seen.insert(corners).second) << "duplicate triangle " << t;
+  }
+}
+
+// Fraction of output triangles whose normal opposes the input's surface normal at the input
+// point closest to the output triangle's centroid.
+double flipped_fraction(const NodeMesh& input, const NodeMesh& output) {
+  const measure::TriangleBvh bvh(input.vertices, input.layout.floats(), input.indices);
+  const std::size_t stride = output.layout.floats();
+  std::size_t flipped = 0;
+  for (std::size_t t = 0; t < output.triangle_count(); ++t) {
+    glm::vec3 centroid(0.0f);
+    for (std::size_t k = 0; k < 3; ++k) {
+      const float* f = &output.vertices[output.indices[3 * t + k] * stride];
+      centroid += glm::vec3(f[0], f[1], f[2]) / 3.0f;
+    }
+    const auto hit = bvh.closest(centroid);
+    const auto n_in = face_normal(input, hit.triangle);
+    const auto n_out = face_normal(output, t);
+    if (n_in[0] * n_out[0] + n_in[1] * n_out[1] + n_in[2] * n_out[2] < 0.0) ++flipped;
+  }
+  return static_cast<double>(flipped) / static_cast<double>(std::max<std::size_t>(1, output.triangle_count()));
+}
+
+SimplifyResult simplify(const NodeMesh& mesh, const Bounds& cell, SimplifyOptions options) {
+  auto result = simplify_node(mesh, cell, options);
+  EXPECT_TRUE(result.ok()) << result.status().message();
+  return result.ok() ? std::move(result.value()) : SimplifyResult{};
+}
+
+SimplifyOptions grid_target(std::uint32_t target) {
+  SimplifyOptions options;
+  options.target_triangles = target;
+  return options;
+}
+SimplifyOptions grid_resolution(std::uint32_t g) {
+  SimplifyOptions options;
+  options.grid_resolution = g;
+  return options;
+}
+SimplifyOptions bade2006() {
+  SimplifyOptions options;
+  options.method = ClusterMethod::bade2006;
+  return options;
+}
+
+// ---- generalized quadrics -------------------------------------------------------------------
+
+TEST(QuadricTest, PlaneQuadricIsZeroOnThePlaneAndSquaredDistanceOffIt) {
+  // a tilted plane through (1,2,3) with unit normal n = (2,-1,2)/3, triangle spanned inside it
+  const double n[3] = {2.0 / 3, -1.0 / 3, 2.0 / 3};
+  const double u[3] = {1.0 / std::sqrt(2.0), std::sqrt(2.0), 0.0};  // u.n = 0 (scaled below)
+  const double w[3] = {n[1] * u[2] - n[2] * u[1], n[2] * u[0] - n[0] * u[2], n[0] * u[1] - n[1] * u[0]};
+  const double p[3] = {1, 2, 3};
+  double q[3], r[3];
+  for (int i = 0; i < 3; ++i) q[i] = p[i] + 0.7 * u[i], r[i] = p[i] + 0.3 * u[i] + 1.1 * w[i];
+  double quadric[kMaxQuadricDoubles];
+  triangle_quadric(3, p, q, r, 1.0, quadric);
+  for (const double s : {-3.0, 0.0, 2.5}) {
+    for (const double d : {0.0, 0.25, -1.5, 10.0}) {
+      const double x[3] = {p[0] + s * u[0] + 0.4 * w[0] + d * n[0], p[1] + s * u[1] + 0.4 * w[1] + d * n[1],
+                           p[2] + s * u[2] + 0.4 * w[2] + d * n[2]};
+      EXPECT_NEAR(evaluate_quadric(3, quadric, x), d * d, 1e-9 * (1 + d * d)) << "s=" << s << " d=" << d;
+    }
+  }
+  // the weight scales it
+  triangle_quadric(3, p, q, r, 2.5, quadric);
+  const double off[3] = {p[0] + 2 * n[0], p[1] + 2 * n[1], p[2] + 2 * n[2]};
+  EXPECT_NEAR(evaluate_quadric(3, quadric, off), 2.5 * 4, 1e-9);
+  // a degenerate triangle has no plane: zero quadric
+  triangle_quadric(3, p, p, r, 1.0, quadric);
+  EXPECT_EQ(evaluate_quadric(3, quadric, off), 0.0);
+}
+
+TEST(QuadricTest, GeneralizedQuadricIsZeroOnTheTrianglesPlaneInRn) {
+  // n = 5: position + uv with uv = (x + 2y, 3 - z): a point of the plane in R^5 has Q = 0, the
+  // same position with a wrong uv has Q = distance^2 in R^5 to the plane
+  auto vertex = [](double x, double y, double z, double* v) {
+    v[0] = x, v[1] = y, v[2] = z, v[3] = x + 2 * y, v[4] = 3 - z;
+  };
+  double p[5], q[5], r[5];
+  vertex(0, 0, 0, p), vertex(1, 0, 0.5, q), vertex(0, 1, 0.25, r);
+  double quadric[kMaxQuadricDoubles];
+  triangle_quadric(5, p, q, r, 1.0, quadric);
+  double x[5];
+  vertex(0.3, 0.3, 0.5 * 0.3 + 0.25 * 0.3, x);  // in the triangle's plane
+  EXPECT_NEAR(evaluate_quadric(5, quadric, x), 0.0, 1e-12);
+  x[3] += 0.1;
+  EXPECT_GT(evaluate_quadric(5, quadric, x), 0.0);
+  EXPECT_LE(evaluate_quadric(5, quadric, x), 0.01 + 1e-12);  // at most the attribute offset squared
+}
+
+TEST(QuadricTest, LinearAttributesInterpolateExactly) {
+  // n = 11 (normal, colour, uv), fields linear in x,y on the plane z = 0.5x - 0.25y; quadrics of
+  // several triangles summed; with the position fixed anywhere on the plane, the minimizing
+  // attributes are the fields' values there.
+  auto vertex = [](double x, double y, double* v) {
+    v[0] = x, v[1] = y, v[2] = 0.5 * x - 0.25 * y;
+    v[3] = 0.1 * x, v[4] = 0.2 * y, v[5] = 0.9;                  // "normal" (unnormalized field)
+    v[6] = 0.2 + 0.3 * x, v[7] = 0.5 - 0.1 * y, v[8] = 0.1 * x + 0.2 * y;  // colour
+    v[9] = 2 * x - y, v[10] = 0.5 * y;                             // uv
+  };
+  double sum[kMaxQuadricDoubles] = {};
+  const double corners[4][2] = {{0, 0}, {1, 0}, {1.2, 0.9}, {-0.1, 1}};
+  for (int t = 0; t < 2; ++t) {
+    double a[11], b[11], c[11];
+    vertex(corners[0][0], corners[0][1], a);
+    vertex(corners[t + 1][0], corners[t + 1][1], b);
+    vertex(corners[t + 2][0], corners[t + 2][1], c);
+    double q[kMaxQuadricDoubles];
+    triangle_quadric(11, a, b, c, 0.7 + t, q);
+    add_quadric(11, sum, q);
+  }
+  for (const auto& at : {std::array<double, 2>{0.4, 0.3}, std::array<double, 2>{2.0, -1.0}}) {
+    double expected[11], v[11];
+    vertex(at[0], at[1], expected);
+    std::copy(expected, expected + 3, v);
+    const double mean[8] = {0, 0, 0, 0, 0, 0, 0, 0};  // far from the answer on purpose
+    minimize_quadric_free_tail(11, 3, sum, mean, v);
+    for (int i = 3; i < 11; ++i) EXPECT_NEAR(v[i], expected[i], 1e-9) << "attribute " << i;
+  }
+}
+
+TEST(QuadricTest, RankDeficientMinimizerIsNearestTheMean) {
+  double q[kMaxQuadricDoubles], sum[kMaxQuadricDoubles] = {};
+  // one plane z = 1 (rank 1): the minimizer nearest the mean is the mean projected on the plane
+  const double a[3] = {0, 0, 1}, b[3] = {1, 0, 1}, c[3] = {0, 1, 1};
+  triangle_quadric(3, a, b, c, 1.0, q);
+  const double mean[3] = {5, -3, 7};
+  double v[3];
+  minimize_quadric(3, q, mean, v);
+  EXPECT_NEAR(v[0], 5, 1e-9);
+  EXPECT_NEAR(v[1], -3, 1e-9);
+  EXPECT_NEAR(v[2], 1, 1e-9);
+  // two planes z = 1 and x = 2 (rank 2, a crease): the mean projected on their line
+  add_quadric(3, sum, q);
+  const double d[3] = {2, 0, 0}, e[3] = {2, 1, 0}, f[3] = {2, 0, 1};
+  triangle_quadric(3, d, e, f, 1.0, q);
+  add_quadric(3, sum, q);
+  minimize_quadric(3, sum, mean, v);
+  EXPECT_NEAR(v[0], 2, 1e-9);
+  EXPECT_NEAR(v[1], -3, 1e-9);
+  EXPECT_NEAR(v[2], 1, 1e-9);
+  // a third plane y = 4 (full rank): the corner, whatever the mean
+  const double g[3] = {0, 4, 0}, h[3] = {0, 4, 1}, k[3] = {1, 4, 0};
+  triangle_quadric(3, g, h, k, 1.0, q);
+  add_quadric(3, sum, q);
+  minimize_quadric(3, sum, mean, v);
+  EXPECT_NEAR(v[0], 2, 1e-9);
+  EXPECT_NEAR(v[1], 4, 1e-9);
+  EXPECT_NEAR(v[2], 1, 1e-9);
+  // nearly parallel planes (a weakly curved sheet): the unconstrained direction stays at the mean
+  // instead of sliding to the far-away intersection line
+  double nearly[kMaxQuadricDoubles] = {};
+  triangle_quadric(3, a, b, c, 1.0, q);
+  add_quadric(3, nearly, q);
+  const double tilted[3][3] = {{0, 0, 1}, {1, 0, 1.0001}, {0, 1, 1}};  // slope 1e-4 in x
+  triangle_quadric(3, tilted[0], tilted[1], tilted[2], 1.0, q);
+  add_quadric(3, nearly, q);
+  minimize_quadric(3, nearly, mean, v);
+  EXPECT_NEAR(v[0], 5, 1e-3);
+  EXPECT_NEAR(v[2], 1, 1e-3);
+  // no triangles: the mean itself
+  const double zero[kMaxQuadricDoubles] = {};
+  minimize_quadric(3, zero, mean, v);
+  EXPECT_EQ(v[0], 5);
+  EXPECT_EQ(v[1], -3);
+  EXPECT_EQ(v[2], 7);
+}
+
+// ---- boundary edges -------------------------------------------------------------------------
+
+TEST(BoundaryTest, FindsEdgesUsedOnceKeyedOnPositions) {
+  //  3 ---- 2      two triangles (0,1,2) and (4,2,3); vertex 4 is vertex 0's position with
+  //  |    / |      another uv (an attribute seam along the diagonal 0-2)
+  //  |  /   |
+  //  0 ---- 1
+  NodeMesh mesh;
+  mesh.layout = {false, false, true};
+  mesh.vertices = {0, 0, 0, 0, 0,  1, 0, 0, 1, 0,  1, 1, 0, 1, 1,  0, 1, 0, 0, 1,  0, 0, 0, 0.5f, 0.5f};
+  mesh.indices = {0, 1, 2, 4, 2, 3};
+  const PositionIds positions = make_position_ids(mesh);
+  EXPECT_EQ(positions.count, 4u);
+  EXPECT_EQ(positions.of_vertex[4], positions.of_vertex[0]);
+  const Boundary boundary = find_boundary(mesh, positions);
+  ASSERT_EQ(boundary.edges.size(), 4u);  // the seam diagonal is interior
+  // in order of first use, in the winding of the triangle that uses them
+  EXPECT_EQ(boundary.edges[0].a, 0u);
+  EXPECT_EQ(boundary.edges[0].b, 1u);
+  EXPECT_EQ(boundary.edges[1].a, 1u);
+  EXPECT_EQ(boundary.edges[1].b, 2u);
+  EXPECT_EQ(boundary.edges[2].a, 2u);
+  EXPECT_EQ(boundary.edges[2].b, 3u);
+  EXPECT_EQ(boundary.edges[3].a, 3u);
+  EXPECT_EQ(boundary.edges[3].b, 4u);
+  EXPECT_EQ(std::count(boundary.locked_position.begin(), boundary.locked_position.end(), 1), 4);
+
+  // a closed tetrahedron has no boundary; with one face removed, that face's three edges
+  NodeMesh tetra;
+  tetra.vertices = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1};
+  tetra.indices = {0, 2, 1, 0, 1, 3, 1, 2, 3, 0, 3, 2};
+  EXPECT_TRUE(find_boundary(tetra, make_position_ids(tetra)).edges.empty());
+  tetra.indices.resize(9);
+  const Boundary open = find_boundary(tetra, make_position_ids(tetra));
+  EXPECT_EQ(open.edges.size(), 3u);
+  EXPECT_EQ(open.locked_position, (std::vector<std::uint8_t>{1, 0, 1, 1}));
+}
+
+TEST(SimplifyTest, BoundaryVerticesAndEdgesSurviveBitIdentical) {
+  const NodeMesh input = plane_grid(32);
+  const SimplifyResult result = simplify(input, input.bounds(), grid_target(300));
+  ASSERT_GT(result.mesh.triangle_count(), 0u);
+  EXPECT_LE(result.mesh.triangle_count(), 300u);
+  const std::set<EdgeKey> boundary = odd_edges(input);
+  EXPECT_EQ(boundary.size(), 4u * 32u);
+  EXPECT_EQ(odd_edges(result.mesh), boundary);
+  std::set<std::vector<float>> output_records;
+  for (std::uint32_t v = 0; v < result.mesh.vertex_count(); ++v) output_records.insert(vertex_record(result.mesh, v));
+  std::set<PositionKey> boundary_positions;
+  for (const EdgeKey& edge : boundary) boundary_positions.insert(edge.begin(), edge.end());
+  std::size_t locked_records = 0;
+  for (std::uint32_t v = 0; v < input.vertex_count(); ++v) {
+    if (!boundary_positions.count(position_key(input, v))) continue;
+    ++locked_records;
+    EXPECT_TRUE(output_records.count(vertex_record(input, v))) << "boundary vertex " << v << " changed";
+  }
+  EXPECT_EQ(locked_records, 4u * 32u);
+  expect_clean(result.mesh);
+}
+
+TEST(SimplifyTest, SplitPlaneHalvesShareTheirBoundaryAcrossMethods) {
+  const NodeMesh plane = plane_grid(40);
+  Bounds cell = plane.bounds();
+  cell.max[2] = 0.5f, cell.min[2] = -0.5f;
+  const std::array<Node, 2> halves = split_at_x(plane, cell, 0.5f);
+  const std::set<EdgeKey> outer = odd_edges(plane);
+  const std::vector<std::array<SimplifyOptions, 2>> pairings = {
+      {grid_target(60), bade2006()}, {grid_resolution(3), grid_target(400)}, {bade2006(), grid_resolution(7)}};
+  for (const auto& options : pairings) {
+    const SimplifyResult left = simplify(halves[0].mesh, halves[0].cell, options[0]);
+    const SimplifyResult right = simplify(halves[1].mesh, halves[1].cell, options[1]);
+    ASSERT_GT(left.mesh.triangle_count(), 0u);
+    ASSERT_GT(right.mesh.triangle_count(), 0u);
+    const NodeMesh* parts[] = {&left.mesh, &right.mesh};
+    // the cut line is shared exactly: the union's open edges are the plane's outer border
+    EXPECT_EQ(odd_edges(merge_meshes(parts)), outer);
+  }
+}
+
+TEST(SimplifyTest, SplitRockHalvesStayClosed) {
+  const NodeMesh rock = make_sample(samplegen::Shape::rock, 20'000);
+  ASSERT_TRUE(odd_edges(rock).empty());
+  const std::array<Node, 2> halves = split_at_x(rock, rock.bounds(), 0.1f);
+  ASSERT_FALSE(odd_edges(halves[0].mesh).empty());
+  const std::vector<std::array<SimplifyOptions, 2>> pairings = {
+      {grid_target(500), bade2006()}, {grid_target(500), grid_target(3000)}, {grid_resolution(2), grid_resolution(40)}};
+  for (const auto& options : pairings) {
+    const SimplifyResult left = simplify(halves[0].mesh, halves[0].cell, options[0]);
+    const SimplifyResult right = simplify(halves[1].mesh, halves[1].cell, options[1]);
+    const NodeMesh* parts[] = {&left.mesh, &right.mesh};
+    EXPECT_TRUE(odd_edges(merge_meshes(parts)).empty());
+    expect_clean(left.mesh);
+    expect_clean(right.mesh);
+  }
+}
+
+// ---- bade2006 -------------------------------------------------------------------------------
+
+TEST(SimplifyTest, Bade2006FansEveryBoundaryEdgeToOneRepresentative) {
+  const NodeMesh rock = make_sample(samplegen::Shape::rock, 8'000);
+  const Node half = split_at_x(rock, rock.bounds(), 0.0f)[0];
+  const SimplifyResult result = simplify(half.mesh, half.cell, bade2006());
+  const NodeMesh& out = result.mesh;
+  // directed input boundary edges (positions in the winding of their triangle)
+  const PositionIds positions = make_position_ids(half.mesh);
+  const Boundary boundary = find_boundary(half.mesh, positions);
+  std::multiset<EdgeKey> expected;
+  for (const BoundaryEdge& edge : boundary.edges)
+    expected.insert({position_key(half.mesh, edge.a), position_key(half.mesh, edge.b)});
+  ASSERT_EQ(out.triangle_count(), boundary.edges.size());
+  // vertex 0 is the representative, in every triangle as the third corner; the other two are
+  // a boundary edge in its winding
+  std::multiset<EdgeKey> fanned;
+  for (std::size_t t = 0; t < out.triangle_count(); ++t) {
+    EXPECT_EQ(out.indices[3 * t + 2], 0u);
+    fanned.insert({position_key(out, out.indices[3 * t]), position_key(out, out.indices[3 * t + 1])});
+  }
+  EXPECT_EQ(fanned, expected);
+  // the representative lies in the cell; every other vertex is a verbatim input boundary vertex
+  EXPECT_TRUE(half.cell.contains(&out.vertices[0]));
+  std::set<std::vector<float>> input_records;
+  for (std::uint32_t v = 0; v < half.mesh.vertex_count(); ++v) input_records.insert(vertex_record(half.mesh, v));
+  for (std::uint32_t v = 1; v < out.vertex_count(); ++v) EXPECT_TRUE(input_records.count(vertex_record(out, v)));
+  EXPECT_TRUE(odd_edges(out) == odd_edges(half.mesh));
+  expect_clean(out);
+}
+
+TEST(SimplifyTest, Bade2006PullsAFarRepresentativeToTheCellCentre) {
+  const NodeMesh mesh = roof();
+  const Bounds cell = mesh.bounds();  // z in [0, 0.2]; the quadric optimum is on the ridge, z = 1
+  const SimplifyResult result = simplify(mesh, cell, bade2006());
+  ASSERT_GT(result.mesh.vertex_count(), 1u);
+  const float* rep = &result.mesh.vertices[0];
+  for (std::size_t i = 0; i < 3; ++i) EXPECT_EQ(rep[i], 0.5f * (cell.min[i] + cell.max[i])) << "axis " << i;
+}
+
+TEST(SimplifyTest, GridRepresentativeIsClampedIntoItsCell) {
+  // one grid cell for everything: the 18 interior vertices form one cluster whose quadric optimum
+  // nearest their mean is (0, 0.5, 1) on the ridge, clamped to the top of the cell, z = 0.2
+  const NodeMesh mesh = roof();
+  const Bounds cell = mesh.bounds();
+  const SimplifyResult result = simplify(mesh, cell, grid_resolution(1));
+  const std::set<EdgeKey> boundary = odd_edges(mesh);
+  std::set<PositionKey> boundary_positions;
+  for (const EdgeKey& edge : boundary) boundary_positions.insert(edge.begin(), edge.end());
+  std::set<PositionKey> representatives;  // one position; a vertex per strip (two wedges)
+  for (std::uint32_t v = 0; v < result.mesh.vertex_count(); ++v) {
+    const float* p = &result.mesh.vertices[v * 3];
+    EXPECT_TRUE(cell.contains(p));
+    if (boundary_positions.count(position_key(result.mesh, v))) continue;
+    representatives.insert(position_key(result.mesh, v));
+    EXPECT_NEAR(p[0], 0.0f, 1e-5f);
+    EXPECT_NEAR(p[1], 0.5f, 1e-5f);
+    EXPECT_NEAR(p[2], cell.max[2], 1e-6f);
+  }
+  EXPECT_EQ(representatives.size(), 1u);
+  EXPECT_EQ(odd_edges(result.mesh), boundary);
+}
+
+// ---- grid quality ---------------------------------------------------------------------------
+
+TEST(SimplifyTest, GridOutputIsCleanWithinTargetAndNotFlipped) {
+  for (const samplegen::Shape shape : {samplegen::Shape::rock, samplegen::Shape::city}) {
+    const NodeMesh input = make_sample(shape, 20'000);
+    for (const std::uint32_t target : {5'000u, 1'000u}) {
+      const SimplifyResult result = simplify(input, input.bounds(), grid_target(target));
+      const std::size_t count = result.mesh.triangle_count();
+      EXPECT_LE(count, target);
+      EXPECT_GE(count, target / 2) << "the resolution search should get near the target";
+      expect_clean(result.mesh);
+      const double flipped = flipped_fraction(input, result.mesh);
+      std::printf("[ info ] %s 20K -> %zu triangles: %.2f%% opposed to the nearest input triangle\n",
+                  std::string(samplegen::to_string(shape)).c_str(), count, 100.0 * flipped);
+      // Re-winding by the sources' normals leaves only triangles whose sources disagree (thin
+      // features folded inside one cell) opposed to the nearest input surface. Only asserted on
+      // the rock: the city's boxes stand on the ground with their bottoms, coincident faces of
+      // opposite orientation, so "the nearest input triangle" is a coin toss there.
+      if (shape == samplegen::Shape::rock) {
+        EXPECT_LT(flipped, 0.01);
+      }
+    }
+  }
+}
+
+TEST(SimplifyTest, GridBeatsBade2006OnRmsAtAboutEqualCount) {
+  const NodeMesh rock = make_sample(samplegen::Shape::rock, 20'000);
+  const Node half = split_at_x(rock, rock.bounds(), 0.0f)[0];
+  const SimplifyResult seed = simplify(half.mesh, half.cell, bade2006());
+  const auto count = static_cast<std::uint32_t>(seed.mesh.triangle_count());
+  const SimplifyResult grid = simplify(half.mesh, half.cell, grid_target(count));
+  EXPECT_LE(grid.mesh.triangle_count(), count);
+  measure::MetroOptions metro;
+  metro.samples = 200'000;
+  const auto seed_report = measure::evaluate(half.mesh, seed.mesh, metro);
+  const auto grid_report = measure::evaluate(half.mesh, grid.mesh, metro);
+  ASSERT_TRUE(seed_report.ok() && grid_report.ok());
+  std::printf("[ info ] rock half %zu tris: bade2006 %u tris RMS %.5f, grid %zu tris RMS %.5f\n",
+              half.mesh.triangle_count(), count, seed_report->two_sided.rms, grid.mesh.triangle_count(),
+              grid_report->two_sided.rms);
+  EXPECT_LT(grid_report->two_sided.rms, seed_report->two_sided.rms);
+}
+
+// ---- seams ----------------------------------------------------------------------------------
+
+TEST(SimplifyTest, UvSeamIsNeverAveragedAcross) {
+  // The rock's u is the longitude / 2 pi: u jumps from 1 to 0 at longitude 0, where the
+  // generator duplicates the vertices. A triangle with corners from both sides of that seam has
+  // a u-range near 1.
+  const NodeMesh input = make_sample(samplegen::Shape::rock, 40'000);
+  const std::size_t stride = input.layout.floats();
+  const std::size_t u = input.layout.uv_offset();
+  auto max_u_range = [&](const NodeMesh& mesh) {
+    float worst = 0.0f;
+    for (std::size_t t = 0; t < mesh.triangle_count(); ++t) {
+      float lo = 2.0f, hi = -1.0f;
+      for (std::size_t k = 0; k < 3; ++k) {
+        const float value = mesh.vertices[mesh.indices[3 * t + k] * stride + u];
+        lo = std::min(lo, value), hi = std::max(hi, value);
+      }
+      worst = std::max(worst, hi - lo);
+    }
+    return worst;
+  };
+  // The pole fans span up to half the longitudes (u-range 0.5); a triangle with corners from
+  // both sides of the seam has a u-range above 0.75 (one side near 0, the other near 1).
+  ASSERT_LE(max_u_range(input), 0.5f);
+  const SimplifyResult result = simplify(input, input.bounds(), grid_target(2'000));  // 5%
+  EXPECT_LE(max_u_range(result.mesh), 0.75f);
+  measure::MetroOptions metro;
+  metro.samples = 400'000;
+  const auto report = measure::evaluate(input, result.mesh, metro);
+  ASSERT_TRUE(report.ok());
+  std::printf("[ info ] rock 40K -> %zu: uv RMS %.5f (input->output %.5f), RMS distance %.5f, max u-range %.3f\n",
+              result.mesh.triangle_count(), report->two_sided.uv_rms, report->a_to_b.uv_rms, report->two_sided.rms,
+              max_u_range(result.mesh));
+  // Bound: u spans 1 over the circumference 2 pi r (r about 1 here) and v 1 over pi r, so
+  // inside a wedge the fields are smooth and a wedge's linear fit errs by far less than 0.01.
+  // What remains are samples near the seam whose closest point on the other mesh lands on the
+  // other side of it (the metro.h caveat): a u error of up to 1 on a strip about one output
+  // cell wide (0.05 at 5%) along the seam (length ~ pi r ~ 3), i.e. 0.15 of the ~10 area
+  // units: 1.5% of the samples, RMS <= sqrt(0.015) ~ 0.12.
+  EXPECT_LT(report->two_sided.uv_rms, 0.12);
+}
+
+// ---- error bounds and LOD chains ------------------------------------------------------------
+
+TEST(LodTest, EveryLodErrorBoundsTheMeasuredHausdorff) {
+  const NodeMesh rock = make_sample(samplegen::Shape::rock, 200'000);
+  Bounds cube = rock.bounds();
+  for (const Node& node : split_at_x(rock, cube, 0.05f)) {
+    auto lods = build_lods(node.mesh, 0.0, node.cell, {});
+    ASSERT_TRUE(lods.ok()) << lods.status().message();
+    ASSERT_GE(lods->size(), 4u);
+    EXPECT_EQ(lods->front().mesh, node.mesh);
+    EXPECT_EQ(lods->front().error, 0.0);
+    double worst_ratio = 0.0, first_ratio = 0.0;
+    for (std::size_t k = 1; k < lods->size(); ++k) {
+      const Lod& lod = lods.value()[k];
+      measure::MetroOptions metro;
+      metro.samples = 400'000;
+      const auto report = measure::evaluate(node.mesh, lod.mesh, metro);
+      ASSERT_TRUE(report.ok());
+      // sampling misses the corners, where the distance to the LOD peaks: add exact distances
+      // of the input vertices
+      double measured = report->a_to_b.max;
+      const measure::TriangleBvh bvh(lod.mesh.vertices, lod.mesh.layout.floats(), lod.mesh.indices);
+      const std::size_t stride = node.mesh.layout.floats();
+      for (std::size_t v = 0; v < node.mesh.vertex_count(); ++v) {
+        const float* f = &node.mesh.vertices[v * stride];
+        measured = std::max(measured, static_cast<double>(bvh.closest(glm::vec3(f[0], f[1], f[2])).distance));
+      }
+      std::printf("[ info ] LOD %zu: %zu tris, stored error %.5f, measured one-sided Hausdorff %.5f, ratio %.2f\n", k,
+                  lod.mesh.triangle_count(), lod.error, measured, lod.error / measured);
+      EXPECT_LE(measured, lod.error) << "LOD " << k;
+      EXPECT_GE(lod.error, lods.value()[k - 1].error);
+      worst_ratio = std::max(worst_ratio, lod.error / measured);
+      if (k == 1) first_ratio = lod.error / measured;
+    }
+    // One step's bound is within 4x of the measured distance; along the chain the steps' bounds
+    // add up (triangle inequality) while the measured distances do not, hence 8x at depth.
+    EXPECT_LE(first_ratio, 4.0) << "one step's bound is too loose";
+    EXPECT_LE(worst_ratio, 8.0) << "the bound is too loose to drive the runtime's LOD choice";
+  }
+}
+
+TEST(LodTest, ChainHalvesEachStepAndStopsNearMinTriangles) {
+  const NodeMesh rock = make_sample(samplegen::Shape::rock, 20'000);
+  LodOptions options;
+  auto lods = build_lods(rock, 0.0, rock.bounds(), options);
+  ASSERT_TRUE(lods.ok());
+  ASSERT_GE(lods->size(), 3u);
+  EXPECT_EQ(lods->front().mesh, rock);
+  for (std::size_t k = 1; k < lods->size(); ++k) {
+    EXPECT_LE(lods.value()[k].mesh.triangle_count(), lods.value()[k - 1].mesh.triangle_count() / 2) << "LOD " << k;
+    EXPECT_GT(lods.value()[k].error, lods.value()[k - 1].error);
+  }
+  // a closed rock has no locked boundary: the chain goes down to min_triangles and stops there
+  EXPECT_LE(lods->back().mesh.triangle_count(), options.min_triangles);
+  EXPECT_GT(lods.value()[lods->size() - 2].mesh.triangle_count(), options.min_triangles);
+  // max_lods caps it
+  options.max_lods = 2;
+  auto capped = build_lods(rock, 0.0, rock.bounds(), options);
+  ASSERT_TRUE(capped.ok());
+  EXPECT_EQ(capped->size(), 2u);
+}
+
+TEST(LodTest, InternalNodeModeStartsWithASimplification) {
+  const NodeMesh rock = make_sample(samplegen::Shape::rock, 4'000);
+  LodOptions options;
+  options.include_input = false;
+  auto lods = build_lods(rock, 0.01, rock.bounds(), options);
+  ASSERT_TRUE(lods.ok());
+  ASSERT_GE(lods->size(), 2u);
+  EXPECT_LT(lods->front().mesh.triangle_count(), rock.triangle_count());
+  EXPECT_GT(lods->front().error, 0.01);
+  // an input already at most min_triangles: its only LOD is the input with its error
+  const NodeMesh small = make_sample(samplegen::Shape::rock, 200);
+  auto single = build_lods(small, 0.02, small.bounds(), options);
+  ASSERT_TRUE(single.ok());
+  ASSERT_EQ(single->size(), 1u);
+  EXPECT_EQ(single->front().mesh, small);
+  EXPECT_EQ(single->front().error, 0.02);
+}
+
+TEST(LodTest, SameBytesOnEveryRunAndThread) {
+  const NodeMesh rock = make_sample(samplegen::Shape::rock, 20'000);
+  const Node half = split_at_x(rock, rock.bounds(), 0.0f)[0];
+  auto first = build_lods(half.mesh, 0.0, half.cell, {});
+  ASSERT_TRUE(first.ok());
+  Result<std::vector<Lod>> second = usage_error("not run");
+  std::thread other([&] { second = build_lods(half.mesh, 0.0, half.cell, {}); });
+  other.join();
+  ASSERT_TRUE(second.ok());
+  ASSERT_EQ(first->size(), second->size());
+  for (std::size_t k = 0; k < first->size(); ++k) {
+    EXPECT_EQ(first.value()[k].mesh, second.value()[k].mesh) << "LOD " << k;
+    EXPECT_EQ(first.value()[k].error, second.value()[k].error) << "LOD " << k;
+  }
+}
+
+// ---- API edges ------------------------------------------------------------------------------
+
+TEST(SimplifyTest, RejectsInconsistentMeshesAndMeaninglessOptions) {
+  NodeMesh mesh = plane_grid(2, {});
+  const Bounds cell = mesh.bounds();
+  NodeMesh bad_index = mesh;
+  bad_index.indices[4] = 99;
+  EXPECT_EQ(simplify_node(bad_index, cell, grid_target(2)).status().code(), ErrorCode::bad_input);
+  NodeMesh ragged = mesh;
+  ragged.vertices.pop_back();
+  EXPECT_EQ(simplify_node(ragged, cell, grid_target(2)).status().code(), ErrorCode::bad_input);
+  NodeMesh not_finite = mesh;
+  not_finite.vertices[4] = std::numeric_limits<float>::quiet_NaN();
+  EXPECT_EQ(simplify_node(not_finite, cell, grid_target(2)).status().code(), ErrorCode::bad_input);
+  EXPECT_EQ(simplify_node(mesh, cell, SimplifyOptions{}).status().code(), ErrorCode::usage);
+  EXPECT_EQ(simplify_node(mesh, Bounds{}, grid_target(2)).status().code(), ErrorCode::usage);
+  LodOptions lod_options;
+  lod_options.reduction = 1.0;
+  EXPECT_EQ(build_lods(mesh, 0.0, cell, lod_options).status().code(), ErrorCode::usage);
+  // an empty mesh simplifies to an empty mesh with error 0
+  NodeMesh empty;
+  auto nothing = simplify_node(empty, cell, grid_target(2));
+  ASSERT_TRUE(nothing.ok());
+  EXPECT_EQ(nothing->mesh.triangle_count(), 0u);
+  EXPECT_EQ(nothing->error_bound, 0.0);
+}
+
+TEST(MergeTest, WeldsIdenticalRecordsAndKeepsTriangleOrder) {
+  NodeMesh a, b;
+  a.vertices = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+  a.indices = {0, 1, 2};
+  b.vertices = {1, 1, 0, 0, 1, 0, 1, 0, 0};  // shares (1,0,0) and (0,1,0) with a
+  b.indices = {2, 0, 1};
+  const NodeMesh* parts[] = {&a, &b};
+  const NodeMesh merged = merge_meshes(parts);
+  EXPECT_EQ(merged.vertices, (std::vector<float>{0, 0, 0, 1, 0, 0, 0, 1, 0, 1, 1, 0}));
+  EXPECT_EQ(merged.indices, (std::vector<std::uint32_t>{0, 1, 2, 1, 3, 2}));
+}
+
+}  // namespace
+}  // namespace octolod::bake
