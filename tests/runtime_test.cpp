@@ -519,6 +519,44 @@ TEST(Disk, OpenDirectoryStreamsNodeFilesFromDisk) {
   std::filesystem::remove_all(dir);
 }
 
+TEST(Disk, CorruptAndMissingNodeFilesOnDiskFallBackToTheirAncestor) {
+  const SyntheticTree tree = make_full_octree(3);
+  const auto dir = scratch_dir("corrupt");
+  testing::write_tree(tree, dir);
+  const std::uint32_t broken = tree.node_at("7/7");
+  const auto corrupt = dir / tree.manifest.nodes[broken].lods[0].file;
+  {  // flip one payload bit in the middle of LOD 0; LOD 1 disappears
+    std::fstream file(corrupt, std::ios::in | std::ios::out | std::ios::binary);
+    const auto middle = static_cast<std::streamoff>(std::filesystem::file_size(corrupt) / 2);
+    file.seekg(middle);
+    const char byte = static_cast<char>(file.get() ^ 0x10);
+    file.seekp(middle);
+    file.put(byte);
+    ASSERT_TRUE(file.good());
+  }
+  std::filesystem::remove(dir / tree.manifest.nodes[broken].lods[1].file);
+
+  auto executor = std::make_shared<SynchronousExecutor>();
+  std::vector<std::string> log;
+  StreamingOptions options;
+  options.log = [&log](std::string_view message) { log.emplace_back(message); };
+  auto opened = StreamingTree::open_directory(dir, executor, options);
+  ASSERT_TRUE(opened.ok()) << opened.status().message();
+  const Camera camera = front(100.0f);  // wants all 64 leaves
+  const FrameResult& frame = settle(*opened.value(), *executor, camera);
+  EXPECT_TRUE(opened.value()->is_bad(broken, 0));
+  EXPECT_TRUE(opened.value()->is_bad(broken, 1));
+  ASSERT_EQ(log.size(), 2u);
+  EXPECT_NE(log[0].find("7/7"), std::string::npos) << log[0];
+  const std::map<std::uint32_t, std::uint32_t> draws = draws_of(frame);
+  EXPECT_EQ(draws.count(broken), 0u);
+  EXPECT_EQ(draws.count(tree.node_at("7")), 1u);
+  EXPECT_EQ(frame.stats.fallbacks, 1u);
+  EXPECT_EQ(frame.stats.holes, 0u);
+  expect_covering_cut(tree, frame, camera);
+  std::filesystem::remove_all(dir);
+}
+
 TEST(Disk, FileSourceReportsAMissingFileAsAnIoError) {
   const FileSource source(std::filesystem::temp_directory_path());
   Result<std::vector<std::byte>> read = source.read("octolod_no_such_dir/lod0.bin");
