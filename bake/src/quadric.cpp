@@ -80,7 +80,7 @@ bool solve_well_conditioned(int m, const Matrix& mat, const double* rhs, double*
   for (int i = 0; i < m; ++i) largest = std::max(largest, mat[static_cast<std::size_t>(i * s + i)]);
   if (!(largest > 0.0)) return false;
   const double threshold = kPseudoInverseThreshold * largest;
-  Matrix l{};  // unit lower triangle below the diagonal, D on the diagonal
+  Matrix l;  // (only the entries written below are read) unit lower triangle below the diagonal, D on the diagonal
   auto at = [&l](int i, int j) -> double& { return l[static_cast<std::size_t>(i * s + j)]; };
   for (int j = 0; j < m; ++j) {
     double d = mat[static_cast<std::size_t>(j * s + j)];
@@ -120,7 +120,7 @@ void solve_nearest(int m, Matrix& mat, const double* rhs, const double* x0, doub
     residual[static_cast<std::size_t>(i)] = r;
   }
   Vector values{};
-  Matrix vectors{};
+  Matrix vectors;  // written by symmetric_eigen
   symmetric_eigen(m, mat, values, vectors);
   double largest = 0.0;
   for (int i = 0; i < m; ++i) largest = std::max(largest, std::fabs(values[static_cast<std::size_t>(i)]));
@@ -199,7 +199,7 @@ void minimize_quadric_free_tail(int n, int k, const double* q, const double* mea
                                 double* v) {
   assert(k >= 0 && k < n && n <= kMaxQuadricDim && "free coordinates k..n-1 must be non-empty");
   const int m = n - k;
-  Matrix mat{};
+  Matrix mat;  // the m x m block is written below
   Vector rhs{};
   const double* b = q + n * (n + 1) / 2;
   for (int i = 0; i < m; ++i) {
