@@ -133,7 +133,8 @@ void write_csv_row(std::ofstream& csv, std::uint32_t frame, const runtime::Frame
       << s.drawn_triangles << ',' << s.resident_bytes << ',' << s.reserved_bytes << ','
       << s.loads_issued << ',' << s.loads_completed << ',' << s.loads_cancelled << ',' << s.loads_failed
       << ',' << s.cache_hits << ',' << s.cache_misses << ',' << s.second_chance_hits << ','
-      << s.fallbacks << ',' << s.holes << ',' << s.coarsening << ',' << s.selection_ms << '\n';
+      << s.fallbacks << ',' << s.holes << ',' << s.coarsening << ',' << s.selection_ms << ','
+      << s.selection_cpu_ms << '\n';
 }
 
 int run_walk(const WalkArgs& args, const CommandContext& context) {
@@ -171,7 +172,7 @@ int run_walk(const WalkArgs& args, const CommandContext& context) {
     if (!csv) return report(io_error(args.csv + ": cannot create"));
     csv << "frame,visited,culled,wanted,drawn_nodes,drawn_triangles,resident_bytes,reserved_bytes,"
            "loads_issued,loads_completed,loads_cancelled,loads_failed,cache_hits,cache_misses,"
-           "second_chance_hits,fallbacks,holes,coarsening,selection_ms\n";
+           "second_chance_hits,fallbacks,holes,coarsening,selection_ms,selection_cpu_ms\n";
   }
 
   // replay at a fixed frame rate: loads progress on the loader threads between frames. Rendering
@@ -214,7 +215,7 @@ int run_walk(const WalkArgs& args, const CommandContext& context) {
                 cancelled = 0, failed = 0;
   double resident_sum = 0, triangles_sum = 0, max_coarsening = 1;
   std::uint32_t waiting_frames = 0, fallback_frames = 0, hole_frames = 0;
-  std::vector<double> ms;
+  std::vector<double> ms, cpu_ms;
   for (const runtime::FrameStats& s : stats) {
     max_resident = std::max(max_resident, s.resident_bytes);
     resident_sum += static_cast<double>(s.resident_bytes);
@@ -231,6 +232,7 @@ int run_walk(const WalkArgs& args, const CommandContext& context) {
     hole_frames += s.holes > 0 ? 1u : 0u;
     max_coarsening = std::max(max_coarsening, static_cast<double>(s.coarsening));
     ms.push_back(s.selection_ms);
+    cpu_ms.push_back(s.selection_cpu_ms);
   }
   const double n = static_cast<double>(stats.size());
   const double hit_rate = hits + misses > 0 ? static_cast<double>(hits) / static_cast<double>(hits + misses) : 1.0;
@@ -261,6 +263,9 @@ int run_walk(const WalkArgs& args, const CommandContext& context) {
                      {"selection_ms_p50", percentile(ms, 0.5)},
                      {"selection_ms_p99", percentile(ms, 0.99)},
                      {"selection_ms_max", ms.empty() ? 0.0 : *std::max_element(ms.begin(), ms.end())},
+                     {"selection_cpu_ms_p50", percentile(cpu_ms, 0.5)},
+                     {"selection_cpu_ms_p99", percentile(cpu_ms, 0.99)},
+                     {"selection_cpu_ms_max", cpu_ms.empty() ? 0.0 : *std::max_element(cpu_ms.begin(), cpu_ms.end())},
                      {"mean_drawn_triangles", triangles_sum / n},
                      {"frames_png", pictures},
                      {"render_seconds", std::chrono::duration<double>(paused).count()}};
@@ -298,8 +303,10 @@ int run_walk(const WalkArgs& args, const CommandContext& context) {
                 static_cast<unsigned long long>(misses), hit_rate, static_cast<unsigned long long>(second_chance));
     std::printf("  frames waiting on I/O %u, frames with fallbacks %u (with holes %u)\n", waiting_frames,
                 fallback_frames, hole_frames);
-    std::printf("  selection ms: p50 %.4f, p99 %.4f, max %.4f\n", percentile(ms, 0.5), percentile(ms, 0.99),
-                ms.empty() ? 0.0 : *std::max_element(ms.begin(), ms.end()));
+    std::printf("  selection ms: p50 %.4f, p99 %.4f, max %.4f (thread CPU: p50 %.4f, p99 %.4f, max %.4f)\n",
+                percentile(ms, 0.5), percentile(ms, 0.99), ms.empty() ? 0.0 : *std::max_element(ms.begin(), ms.end()),
+                percentile(cpu_ms, 0.5), percentile(cpu_ms, 0.99),
+                cpu_ms.empty() ? 0.0 : *std::max_element(cpu_ms.begin(), cpu_ms.end()));
   }
   return 0;
 }

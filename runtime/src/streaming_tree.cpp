@@ -9,6 +9,8 @@
 #include <cmath>
 #include <string>
 
+#include <time.h>
+
 #include <glm/gtc/matrix_transform.hpp>
 
 #include "load_queue.h"
@@ -18,6 +20,13 @@
 
 namespace octolod::runtime {
 namespace {
+
+// CPU time of the calling thread in milliseconds (POSIX thread CPU clock).
+double thread_cpu_ms() {
+  timespec t{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+  return static_cast<double>(t.tv_sec) * 1e3 + static_cast<double>(t.tv_nsec) * 1e-6;
+}
 
 // Added to the priority of a load whose region has nothing resident to draw at all.
 constexpr float kHolePriority = 1e30f;
@@ -132,6 +141,7 @@ struct StreamingTree::Impl {
 
 const FrameResult& StreamingTree::Impl::update(const Camera& camera) {
   const auto start = std::chrono::steady_clock::now();
+  const double start_cpu_ms = thread_cpu_ms();
   ++frame;
   FrameStats& stats = result.stats;
   stats = FrameStats{};
@@ -173,6 +183,7 @@ const FrameResult& StreamingTree::Impl::update(const Camera& camera) {
   previous_eye = camera.position;
   stats.selection_ms =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  stats.selection_cpu_ms = thread_cpu_ms() - start_cpu_ms;
   return result;
 }
 

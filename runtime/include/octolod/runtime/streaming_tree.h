@@ -124,6 +124,9 @@ struct FrameStats {
   // fallbacks instead of waiting.
   std::uint32_t waiting_on_io = 0;
   double selection_ms = 0;  // wall time of the whole update() call
+  // CPU time the calling thread spent in update(): selection_ms without the time the thread was
+  // preempted (on a busy machine the wall time's tail is the scheduler's, not the runtime's).
+  double selection_cpu_ms = 0;
 };
 
 struct FrameResult {
