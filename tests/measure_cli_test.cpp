@@ -443,6 +443,16 @@ TEST_F(BakedRock, CompareReportsEveryCutNextToTheReference) {
                 row["rms"].get<double>() / row["reference_rms"].get<double>(), 1e-9);
   }
 
+  const CliRun cuts_only = run_cli(dir_, "--json compare " + input() + " " + tree() +
+                                             " --samples 5000 --no-reference --errors 0");
+  ASSERT_EQ(cuts_only.code, 0) << cuts_only.err;
+  const json c = json::parse(cuts_only.out);
+  ASSERT_EQ(c["rows"].size(), 1u);
+  EXPECT_EQ(c["rows"][0]["triangles"], 20000);
+  EXPECT_LT(c["rows"][0]["hausdorff"].get<double>(), 1e-6);  // error 0: the original triangles
+  EXPECT_FALSE(c["rows"][0].contains("reference_rms"));
+  EXPECT_TRUE(c["reference_seconds"].is_null());
+
   const CliRun markdown =
       run_cli(dir_, "compare " + input() + " " + tree() + " --samples 5000 --markdown --errors 0");
   ASSERT_EQ(markdown.code, 0) << markdown.err;

@@ -34,6 +34,7 @@ struct CompareArgs {
   std::vector<double> fractions{0.3, 0.1, 0.03, 0.01};
   std::uint64_t samples = 0;
   bool markdown = false;
+  bool no_reference = false;
 };
 
 struct Row {
@@ -42,7 +43,7 @@ struct Row {
   CutSummary summary;             // triangles, largest stored error of the cut
   measure::MetroReport cut_metro;
   std::uint64_t reference_triangles = 0;
-  measure::MetroReport reference_metro;
+  measure::MetroReport reference_metro;  // unset (0 samples) without the reference
 };
 
 // Error targets whose uniform cuts come closest (in log scale) to each wanted fraction of the
@@ -95,38 +96,58 @@ nlohmann::json number_or_null(double value) {
   return std::isfinite(value) ? nlohmann::json(value) : nlohmann::json(nullptr);
 }
 
-void print_table(const std::vector<Row>& rows, const Manifest& manifest, bool markdown) {
-  const char* header[] = {"error target", "stored max", "triangles", "% input", "bake s",
-                          "RMS",          "Hausdorff",  "ref tris",  "ref RMS", "ref Hausdorff",
-                          "RMS ratio",    "Hausdorff ratio"};
-  if (markdown) {
-    std::printf("|");
-    for (const char* h : header) std::printf(" %s |", h);
-    std::printf("\n|");
-    for (std::size_t i = 0; i < std::size(header); ++i) std::printf("---:|");
-    std::printf("\n");
-  } else {
-    std::printf("%12s %11s %10s %8s %7s %11s %11s %10s %11s %13s %9s %15s\n", header[0],
-                header[1], header[2], header[3], header[4], header[5], header[6], header[7],
-                header[8], header[9], header[10], header[11]);
-  }
-  const char* row_format = markdown
-                               ? "| %.4g | %.4g | %llu | %.2f | %.2f | %.4g | %.4g | %llu | %.4g | "
-                                 "%.4g | %.2f | %.2f |\n"
-                               : "%12.4g %11.4g %10llu %8.2f %7.2f %11.4g %11.4g %10llu %11.4g "
-                                 "%13.4g %9.2f %15.2f\n";
-  for (const Row& r : rows)
-    std::printf(row_format, r.error_target, r.summary.max_error,
-                static_cast<unsigned long long>(r.summary.triangles),
-                percent_of(r.summary.triangles, manifest.input_triangles), bake_seconds(manifest),
-                r.cut_metro.two_sided.rms, r.cut_metro.two_sided.max,
-                static_cast<unsigned long long>(r.reference_triangles),
-                r.reference_metro.two_sided.rms, r.reference_metro.two_sided.max,
-                ratio(r.cut_metro.two_sided.rms, r.reference_metro.two_sided.rms),
-                ratio(r.cut_metro.two_sided.max, r.reference_metro.two_sided.max));
+std::string format(const char* spec, double value) {
+  char text[64];
+  std::snprintf(text, sizeof text, spec, value);
+  return text;
 }
 
-nlohmann::json rows_json(const std::vector<Row>& rows, const Manifest& manifest) {
+// One row of cells per cut; the reference columns only when it was run.
+void print_table(const std::vector<Row>& rows, const Manifest& manifest, bool markdown,
+                 bool with_reference) {
+  std::vector<std::vector<std::string>> table{{"error target", "stored max", "triangles",
+                                               "% input", "bake s", "RMS", "Hausdorff"}};
+  if (with_reference)
+    table[0].insert(table[0].end(), {"ref tris", "ref RMS", "ref Hausdorff", "RMS ratio",
+                                     "Hausdorff ratio"});
+  for (const Row& r : rows) {
+    std::vector<std::string> cells{
+        format("%.4g", r.error_target), format("%.4g", r.summary.max_error),
+        std::to_string(r.summary.triangles),
+        format("%.2f", percent_of(r.summary.triangles, manifest.input_triangles)),
+        format("%.2f", bake_seconds(manifest)), format("%.4g", r.cut_metro.two_sided.rms),
+        format("%.4g", r.cut_metro.two_sided.max)};
+    if (with_reference)
+      cells.insert(cells.end(),
+                   {std::to_string(r.reference_triangles),
+                    format("%.4g", r.reference_metro.two_sided.rms),
+                    format("%.4g", r.reference_metro.two_sided.max),
+                    format("%.2f", ratio(r.cut_metro.two_sided.rms, r.reference_metro.two_sided.rms)),
+                    format("%.2f", ratio(r.cut_metro.two_sided.max, r.reference_metro.two_sided.max))});
+    table.push_back(std::move(cells));
+  }
+  for (std::size_t i = 0; i < table.size(); ++i) {
+    std::string line = markdown ? "|" : "";
+    for (std::size_t c = 0; c < table[i].size(); ++c) {
+      if (markdown) {
+        line += " " + table[i][c] + " |";
+      } else {
+        const std::size_t width = table[0][c].size() + 2;
+        line += std::string(width > table[i][c].size() ? width - table[i][c].size() : 1, ' ') +
+                table[i][c];
+      }
+    }
+    std::printf("%s\n", line.c_str());
+    if (markdown && i == 0) {
+      std::string rule = "|";
+      for (std::size_t c = 0; c < table[0].size(); ++c) rule += "---:|";
+      std::printf("%s\n", rule.c_str());
+    }
+  }
+}
+
+// Without the reference, the reference_* and *_ratio fields are left out.
+nlohmann::json rows_json(const std::vector<Row>& rows, const Manifest& manifest, bool with_reference) {
   nlohmann::json out = nlohmann::json::array();
   for (const Row& r : rows)
     out.push_back(
@@ -137,14 +158,19 @@ nlohmann::json rows_json(const std::vector<Row>& rows, const Manifest& manifest)
          {"percent_of_input", percent_of(r.summary.triangles, manifest.input_triangles)},
          {"rms", r.cut_metro.two_sided.rms},
          {"hausdorff", r.cut_metro.two_sided.max},
-         {"cut", metro_json(r.cut_metro)},
-         {"reference_triangles", r.reference_triangles},
-         {"reference_rms", r.reference_metro.two_sided.rms},
-         {"reference_hausdorff", r.reference_metro.two_sided.max},
-         {"reference", metro_json(r.reference_metro)},
-         {"rms_ratio", number_or_null(ratio(r.cut_metro.two_sided.rms, r.reference_metro.two_sided.rms))},
-         {"hausdorff_ratio",
-          number_or_null(ratio(r.cut_metro.two_sided.max, r.reference_metro.two_sided.max))}});
+         {"cut", metro_json(r.cut_metro)}});
+  if (!with_reference) return out;
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    const Row& r = rows[i];
+    nlohmann::json& j = out[i];
+    j["reference_triangles"] = r.reference_triangles;
+    j["reference_rms"] = r.reference_metro.two_sided.rms;
+    j["reference_hausdorff"] = r.reference_metro.two_sided.max;
+    j["reference"] = metro_json(r.reference_metro);
+    j["rms_ratio"] = number_or_null(ratio(r.cut_metro.two_sided.rms, r.reference_metro.two_sided.rms));
+    j["hausdorff_ratio"] =
+        number_or_null(ratio(r.cut_metro.two_sided.max, r.reference_metro.two_sided.max));
+  }
   return out;
 }
 
@@ -209,23 +235,25 @@ int run_compare(const CompareArgs& args, const CommandContext& context) {
         std::clamp<std::uint64_t>(row.summary.triangles, 1, 0xFFFFFFFFu)));
   }
 
-  progress.message("compare: reference decimation to " + std::to_string(counts.size()) +
-                   " triangle counts");
   measure::ReferenceStats reference_stats;
-  Result<std::vector<NodeMesh>> references =
-      measure::reference_simplify_ladder(input->mesh, counts, &reference_stats);
-  if (!references.ok())
-    return report(Status(references.status().code(),
-                         args.input + ": " + references.status().message()));
-  for (std::size_t i = 0; i < rows.size(); ++i) {
-    const NodeMesh& reference = references.value()[i];
-    rows[i].reference_triangles = reference.triangle_count();
-    Result<measure::MetroReport> m = measure::evaluate(input->mesh, reference, metro);
-    if (!m.ok())
-      return report(Status(m.status().code(), m.status().message() + " (a = " + args.input +
-                                                   ", b = its reference at " +
-                                                   std::to_string(counts[i]) + " triangles)"));
-    rows[i].reference_metro = m.value();
+  if (!args.no_reference && !rows.empty()) {
+    progress.message("compare: reference decimation to " + std::to_string(counts.size()) +
+                     " triangle counts");
+    Result<std::vector<NodeMesh>> references =
+        measure::reference_simplify_ladder(input->mesh, counts, &reference_stats);
+    if (!references.ok())
+      return report(Status(references.status().code(),
+                           args.input + ": " + references.status().message()));
+    for (std::size_t i = 0; i < rows.size(); ++i) {
+      const NodeMesh& reference = references.value()[i];
+      rows[i].reference_triangles = reference.triangle_count();
+      Result<measure::MetroReport> m = measure::evaluate(input->mesh, reference, metro);
+      if (!m.ok())
+        return report(Status(m.status().code(), m.status().message() + " (a = " + args.input +
+                                                     ", b = its reference at " +
+                                                     std::to_string(counts[i]) + " triangles)"));
+      rows[i].reference_metro = m.value();
+    }
   }
 
   if (context.json) {
@@ -235,8 +263,8 @@ int run_compare(const CompareArgs& args, const CommandContext& context) {
                 {"method", manifest->parameters.method},
                 {"bake_seconds", number_or_null(bake_seconds(manifest.value()))},
                 {"diagonal", rows.empty() ? 0.0 : rows.front().cut_metro.diagonal},
-                {"reference_seconds", reference_stats.seconds},
-                {"rows", rows_json(rows, manifest.value())}});
+                {"reference_seconds", number_or_null(!args.no_reference ? reference_stats.seconds : std::nan(""))},
+                {"rows", rows_json(rows, manifest.value(), !args.no_reference)}});
     return 0;
   }
   if (!args.markdown)
@@ -245,7 +273,7 @@ int run_compare(const CompareArgs& args, const CommandContext& context) {
                 args.tree.c_str(),
                 manifest->parameters.method.empty() ? "none" : manifest->parameters.method.c_str(),
                 rows.empty() ? 0.0 : rows.front().cut_metro.diagonal);
-  print_table(rows, manifest.value(), args.markdown);
+  print_table(rows, manifest.value(), args.markdown, !args.no_reference);
   return 0;
 }
 
@@ -276,6 +304,9 @@ void add_compare_command(CLI::App& app, CommandContext& context) {
                    "Metro samples per direction; 0 = 10 per triangle, 100K..1M")
       ->capture_default_str();
   command->add_flag("--markdown", args->markdown, "Print the table as Markdown");
+  command->add_flag("--no-reference", args->no_reference,
+                    "Skip the reference decimation (the cut columns only; much faster on "
+                    "large inputs)");
   command->callback([args, &context] { context.exit_code = run_compare(*args, context); });
 }
 
