@@ -1,14 +1,19 @@
 #!/usr/bin/env python3
-"""Benchmark of the bake core (soup + octree + leaf files; seed 3.4, 4.3, Table 5.1).
+"""Benchmark of the bake (soup + octree + LOD hierarchy + node files; seed 3.4, 3.5.3, 4.3,
+Table 5.1).
 
 Generates sample inputs with `octolod sample` (cached in the work directory), runs
-`octolod --json bake` under /usr/bin/time -v, and prints per-stage seconds, triangles/s and
-peak RSS (from the kernel, after the process ended: the manifest writing is included), then
-the seed's Table 5.1: leaves and build time against max-tris 1000..6000 at depths 5 and 8.
+`octolod --json bake` under /usr/bin/time -v, and prints per-stage seconds (soup, octree sort,
+octree stream with the node work overlapping, the LOD work left after the stream, the node work
+summed over threads), triangles/s and peak RSS (from the kernel, after the process ended: the
+manifest writing is included; also minus the RSS of an idle `octolod --help`, the CLI's fixed
+footprint of shared libraries), for the full bake and for `--method none` (soup + octree +
+leaf files only), then the seed's Table 5.1: leaves and full build time against max-tris
+1000..6000 at depths 5 and 8.
 
   bench/bake_bench.py --cli build/cli/octolod [--work /tmp/bake-bench] [--sizes 1M,10M]
-                      [--memory 16M,64M,256M] [--threads 2] [--table-size 1M] [--no-table]
-                      [--markdown]
+                      [--memory 16M,64M,256M] [--threads 2] [--methods grid,none]
+                      [--table-size 1M] [--no-table] [--markdown]
 --markdown prints the tables as Markdown (for docs/benchmarks.md).
 """
 import argparse
@@ -20,11 +25,16 @@ import subprocess
 import sys
 
 
-def run_bake(cli, ply, out, work, memory, threads, max_tris=2000, max_depth=10):
+def idle_rss_mib(cli):
+    p = subprocess.run(["/usr/bin/time", "-v", cli, "--help"], capture_output=True, text=True)
+    return int(re.search(r"Maximum resident set size \(kbytes\): (\d+)", p.stderr).group(1)) / 1024.0
+
+
+def run_bake(cli, ply, out, work, memory, threads, max_tris=2000, max_depth=10, method="grid"):
     shutil.rmtree(out, ignore_errors=True)
     cmd = ["/usr/bin/time", "-v", cli, "--json", "bake", ply, "-o", out, "--work-dir", work,
            "--memory", memory, "--threads", str(threads), "--max-tris", str(max_tris),
-           "--max-depth", str(max_depth)]
+           "--max-depth", str(max_depth), "--method", method]
     p = subprocess.run(cmd, capture_output=True, text=True)
     if p.returncode != 0:
         sys.exit("bake failed: %s\n%s" % (" ".join(cmd), p.stderr))
@@ -56,6 +66,7 @@ def main():
     ap.add_argument("--sizes", default="1M,10M")
     ap.add_argument("--memory", default="16M,64M,256M")
     ap.add_argument("--threads", type=int, default=2)
+    ap.add_argument("--methods", default="grid,none")
     ap.add_argument("--table-size", default="1M")
     ap.add_argument("--no-table", action="store_true")
     ap.add_argument("--markdown", action="store_true")
@@ -77,24 +88,32 @@ def main():
         line = sep.join(str(c) for c in cells)
         print(("| " + " | ".join(str(c) for c in cells) + " |") if args.markdown else line)
 
-    header = ["triangles", "memory", "soup path", "soup s", "octree sort s", "octree stream s",
-              "total s", "M tri/s", "nodes", "leaves", "sort runs", "peak RSS MiB",
-              "budget+24 MiB ok"]
+    idle = idle_rss_mib(args.cli)
+    print("idle `octolod --help` peak RSS: %.1f MiB" % idle)
+    header = ["triangles", "method", "memory", "soup path", "soup s", "octree sort s",
+              "octree stream s", "lods after stream s", "node work s", "total s", "wall s",
+              "M tri/s", "nodes", "LODs", "root coarsest tris", "sort runs", "LOD rereads",
+              "peak RSS MiB", "RSS - idle MiB", "budget+24 MiB ok"]
     row(header)
     if args.markdown:
         row(["---"] * len(header))
     for size in args.sizes.split(","):
         ply = sample(size)
-        for memory in args.memory.split(","):
-            r = run_bake(args.cli, ply, out, work_tmp, memory, args.threads)
-            s = r["stage_seconds"]
-            rss = r["process_peak_rss_mib"]
-            row([size, memory, "in core" if r["soup_in_core"] else "out of core",
-                 "%.2f" % s["soup"], "%.2f" % s["octree.sort"], "%.2f" % s["octree.stream"],
-                 "%.2f" % s["total"], "%.2f" % (r["triangles"] / s["total"] / 1e6), r["nodes"],
-                 r["leaves"], r["octree_sort_runs"], "%.1f" % rss,
-                 "yes" if rss <= mib(memory) + 24 else "NO"])
-            sys.stdout.flush()
+        for method in args.methods.split(","):
+            for memory in args.memory.split(","):
+                r = run_bake(args.cli, ply, out, work_tmp, memory, args.threads, method=method)
+                s = r["stage_seconds"]
+                st = r["stats"]
+                rss = r["process_peak_rss_mib"]
+                row([size, method, memory, "in core" if r["soup_in_core"] else "out of core",
+                     "%.2f" % s["soup"], "%.2f" % s["octree.sort"], "%.2f" % s["octree.stream"],
+                     "%.2f" % s.get("lods", 0), "%.2f" % st.get("node_work_seconds", 0),
+                     "%.2f" % s["total"], "%.2f" % r["process_seconds"],
+                     "%.2f" % (r["triangles"] / s["total"] / 1e6), r["nodes"], r["lods"],
+                     r["root_coarsest_triangles"], r["octree_sort_runs"],
+                     int(st.get("lod_rereads", 0)), "%.1f" % rss, "%.1f" % (rss - idle),
+                     "yes" if rss - idle <= mib(memory) + 24 else "NO"])
+                sys.stdout.flush()
 
     if args.no_table:
         return

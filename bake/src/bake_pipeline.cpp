@@ -1,15 +1,12 @@
-// The bake pipeline (ARCHITECTURE.md stages 2, 3 and 6; seed 3.4, 4.3): soup, Morton sort and
-// streaming octree with leaf writing on worker threads, manifest, atomic publication. See
+// The bake pipeline (ARCHITECTURE.md stages 2-7; seed 3.4, 3.5.3, 4.3): soup, Morton sort and
+// streaming octree with the LOD hierarchy built on worker threads meanwhile (lod_tree.h),
+// manifest, atomic publication. See
 // octolod/bake/bake.h for the contract.
 #include "octolod/bake/bake.h"
 
 #include <algorithm>
-#include <atomic>
 #include <chrono>
 #include <cstring>
-#include <condition_variable>
-#include <deque>
-#include <mutex>
 #include <optional>
 #include <string>
 #include <system_error>
@@ -18,9 +15,9 @@
 #include <vector>
 
 #include "morton.h"
-#include "node_index.h"
 #include "octolod/bake/external_sort.h"
 #include "octolod/bake/soup.h"
+#include "lod_tree.h"
 #include "octolod/formats/node_file.h"
 #include "octree_build.h"
 #include "peak_rss.h"
@@ -38,9 +35,6 @@ double seconds_since(Clock::time_point start) {
 }
 
 Status interrupted() { return io_error("bake interrupted by a signal"); }
-
-// File name of a node's LOD `lod` inside its directory.
-std::string lod_file_name(std::size_t lod) { return "lod" + std::to_string(lod) + ".olod"; }
 
 // Sort key of soup records: the Morton code of the triangle's centroid (morton.h).
 SortKeyFn centroid_morton_key(const MortonQuantizer& quantizer, VertexLayout layout) {
@@ -60,165 +54,35 @@ SortKeyFn centroid_morton_key(const MortonQuantizer& quantizer, VertexLayout lay
   };
 }
 
-// What a leaf's processing produced.
-struct LeafOutput {
-  Bounds bounds;              // tight bounds of its triangles (model units)
-  std::vector<LodInfo> lods;  // finest first
-};
-
-// The per-node LOD step of a leaf (seed 3.5.3: leaves are simplified from the original
-// triangles): its finest LOD is the original triangles, indexed, error 0.
-Result<LeafOutput> build_leaf_lods(const fs::path& root, const std::string& dir,
-                                   const NodeMesh& original) {
-  LeafOutput out;
-  out.bounds = original.bounds();
-  const std::string file = (dir.empty() ? "" : dir + "/") + lod_file_name(0);
-  OCTOLOD_RETURN_IF_ERROR(write_node_file(root / file, original));
-  LodInfo lod;
-  lod.triangles = static_cast<std::uint32_t>(original.triangle_count());
-  lod.vertices = static_cast<std::uint32_t>(original.vertex_count());
-  lod.error = 0.0;
-  lod.bytes = node_file_size(original);
-  lod.file = file;
-  out.lods.push_back(std::move(lod));
-  return out;
-}
-
-// Writes the leaves the octree pass hands out: on the calling thread (threads <= 1) or on
-// worker threads fed through a queue capped at `queue_bytes` of records (one leaf always fits,
-// whatever its size). Each leaf's files depend only on its records, so the output is the same
-// for any number of workers.
-class LeafWriter {
- public:
-  LeafWriter(fs::path root, VertexLayout layout, unsigned workers, std::size_t queue_bytes)
-      : root_(std::move(root)), layout_(layout), queue_bytes_(queue_bytes) {
-    for (unsigned i = 0; i < workers; ++i) threads_.emplace_back([this] { work(); });
-  }
-  ~LeafWriter() { stop(); }
-  LeafWriter(const LeafWriter&) = delete;
-  LeafWriter& operator=(const LeafWriter&) = delete;
-
-  Status submit(std::int32_t node, std::string dir, std::vector<std::byte>&& records) {
-    if (cleanup_signal_received()) return interrupted();
-    Task task{node, std::move(dir), std::move(records)};
-    if (threads_.empty()) return run(task, indexer_, mesh_);
-    std::unique_lock lock(mutex_);
-    space_.wait(lock, [&] {
-      return !error_.ok() || queued_bytes_ == 0 ||
-             queued_bytes_ + task.records.size() <= queue_bytes_;
-    });
-    if (!error_.ok()) return error_;
-    queued_bytes_ += task.records.size();
-    queue_.push_back(std::move(task));
-    work_.notify_one();
-    return {};
-  }
-
-  // Waits for every submitted leaf; the first error any of them met.
-  Status finish() {
-    stop();
-    std::lock_guard lock(mutex_);
-    return error_;
-  }
-
-  std::vector<std::pair<std::int32_t, LeafOutput>>& results() { return results_; }
-
- private:
-  struct Task {
-    std::int32_t node;
-    std::string dir;
-    std::vector<std::byte> records;
-  };
-
-  Status run(const Task& task, NodeIndexer& indexer, NodeMesh& mesh) {
-    if (cleanup_signal_received()) return interrupted();
-    if (!task.dir.empty()) {
-      std::error_code ec;
-      fs::create_directories(root_ / task.dir, ec);
-      if (ec) {
-        return io_error("cannot create node directory '" + (root_ / task.dir).string() +
-                        "': " + ec.message());
-      }
-    }
-    indexer.index(task.records, layout_, mesh);
-    Result<LeafOutput> out = build_leaf_lods(root_, task.dir, mesh);
-    if (!out.ok()) return out.status();
-    std::lock_guard lock(results_mutex_);
-    results_.emplace_back(task.node, std::move(out).value());
-    return {};
-  }
-
-  void work() {
-    NodeIndexer indexer;
-    NodeMesh mesh;
-    for (;;) {
-      Task task;
-      {
-        std::unique_lock lock(mutex_);
-        work_.wait(lock, [&] { return done_ || !queue_.empty(); });
-        if (queue_.empty()) return;
-        task = std::move(queue_.front());
-        queue_.pop_front();
-      }
-      Status status = error_seen_ ? Status{} : run(task, indexer, mesh);
-      std::lock_guard lock(mutex_);
-      queued_bytes_ -= task.records.size();
-      if (!status.ok() && error_.ok()) {
-        error_ = std::move(status);
-        error_seen_ = true;
-      }
-      space_.notify_all();
-    }
-  }
-
-  void stop() {
-    {
-      std::lock_guard lock(mutex_);
-      done_ = true;
-    }
-    work_.notify_all();
-    for (std::thread& t : threads_) t.join();
-    threads_.clear();
-  }
-
-  const fs::path root_;
-  const VertexLayout layout_;
-  const std::size_t queue_bytes_;
-  NodeIndexer indexer_;  // for threads <= 1
-  NodeMesh mesh_;
-  std::vector<std::thread> threads_;
-  std::mutex mutex_;
-  std::condition_variable work_;
-  std::condition_variable space_;
-  std::deque<Task> queue_;
-  std::size_t queued_bytes_ = 0;
-  bool done_ = false;
-  std::atomic<bool> error_seen_{false};
-  Status error_;
-  std::mutex results_mutex_;
-  std::vector<std::pair<std::int32_t, LeafOutput>> results_;
-};
-
-// How the budget is divided in the octree stage: the sort gets what the leaf buffers leave.
+// How the budget is divided in the octree stage: the sort gets what the leaf buffers and the
+// node work leave.
 struct OctreeBudget {
   std::size_t io_bytes = 0;     // the soup file reader's buffer
-  std::size_t queue_bytes = 0;  // leaves waiting for a worker
+  std::size_t queue_bytes = 0;  // leaves waiting for a thread
+  std::size_t keep_bytes = 0;   // children's LODs held for their parents (lod_tree.h)
   std::uint64_t sort_bytes = 0;
 };
 
 Result<OctreeBudget> divide_octree_budget(const BakeOptions& options, VertexLayout layout,
                                           unsigned workers) {
-  // One leaf's records; a worker also holds its mesh and the encoded node file (together about
-  // the records' size: shared vertices are stored once), the octree pass a candidate and a
-  // replay of one.
+  // One leaf's records. A thread doing node work holds a leaf's records, its mesh, the LOD
+  // chain and the simplifier's per-node arrays, or an internal node's merged children (about
+  // four leaves' worth of triangles at half a leaf's resolution each): kNodeWorkLeaves leaves
+  // of records together. The octree pass holds a candidate and a replay of one.
+  constexpr std::uint64_t kNodeWorkLeaves = 3;
   const std::uint64_t leaf =
       (std::uint64_t{options.max_tris} + 1) * soup_record_bytes(layout);
   OctreeBudget b;
   b.io_bytes = static_cast<std::size_t>(
       std::clamp<std::uint64_t>(options.memory_budget_bytes / 16, 4096, std::uint64_t{1} << 20));
   b.queue_bytes = static_cast<std::size_t>(2 * leaf);
-  const std::uint64_t reserve =
-      b.io_bytes + (workers ? b.queue_bytes : 0) + (workers ? workers : 1) * 2 * leaf + 2 * leaf;
+  // Children's LODs kept for their parents: what is pending is one level's closed siblings per
+  // depth of the current path, usually a few leaves' worth; beyond it parents re-read files.
+  b.keep_bytes = static_cast<std::size_t>(
+      options.lods ? std::max(2 * leaf, options.memory_budget_bytes / 16) : 0);
+  const std::uint64_t threads = workers + 1;  // the caller works too
+  const std::uint64_t reserve = b.io_bytes + (workers ? b.queue_bytes : 0) + b.keep_bytes +
+                                threads * (options.lods ? kNodeWorkLeaves : 1) * leaf + 2 * leaf;
   if (reserve > options.memory_budget_bytes / 2) {
     return usage_error("memory budget of " + std::to_string(options.memory_budget_bytes >> 20) +
                        " MiB is too small for --max-tris " + std::to_string(options.max_tris) +
@@ -232,10 +96,12 @@ Result<OctreeBudget> divide_octree_budget(const BakeOptions& options, VertexLayo
 struct OctreeResult {
   RootCube cube;
   std::vector<OctreeNode> nodes;
-  std::vector<std::optional<LeafOutput>> leaves;  // by node index
+  std::vector<std::optional<NodeLods>> lods;  // by node index
+  LodTreeStats lod_stats;
   SortStats sort;
   double sort_seconds = 0;    // run formation (reading the soup into the sorter)
-  double stream_seconds = 0;  // merge + tree decision + leaf writing
+  double stream_seconds = 0;  // merge + tree decision, node work overlapping
+  double lod_seconds = 0;     // the node work left when the stream ended (wall)
 };
 
 // Sorts the soup by centroid Morton code and streams it through the OctreeBuilder, leaves
@@ -281,15 +147,24 @@ Result<OctreeResult> build_octree(const BakeOptions& options, SoupResult& soup,
   OCTOLOD_RETURN_IF_ERROR(sorter.finish());
   result.sort_seconds = seconds_since(start);
 
-  // octree: one pass over the sorted stream decides the tree and hands out the leaves
+  // octree: one pass over the sorted stream decides the tree and hands out the leaves, whose
+  // LOD chains (and then their parents') are built meanwhile (lod_tree.h)
   start = Clock::now();
-  LeafWriter writer(root, soup.layout, workers, budget->queue_bytes);
+  LodTreeOptions lod_options;
+  lod_options.root = root;
+  lod_options.layout = soup.layout;
+  lod_options.cube = result.cube;
+  lod_options.build_lods = options.lods;
+  lod_options.lod.method = options.method;
+  lod_options.workers = workers;
+  lod_options.queue_bytes = budget->queue_bytes;
+  lod_options.keep_bytes = budget->keep_bytes;
+  LodTreeBuilder lod_tree(lod_options);
   OctreeBuilder* builder_ptr = nullptr;
   OctreeBuilder builder(options.max_tris, options.max_depth, record_bytes,
                         [&](std::int32_t node, std::vector<std::byte>&& records) {
-                          const std::string dir =
-                              builder_ptr->nodes()[static_cast<std::size_t>(node)].path();
-                          return writer.submit(node, dir, std::move(records));
+                          if (cleanup_signal_received()) return interrupted();
+                          return lod_tree.add_leaf(node, builder_ptr->nodes(), std::move(records));
                         });
   builder_ptr = &builder;
   std::vector<std::uint64_t> keys;
@@ -314,18 +189,22 @@ Result<OctreeResult> build_octree(const BakeOptions& options, SoupResult& soup,
     progress("octree", done);
   }
   if (streamed.ok()) streamed = builder.finish();
-  const Status written = writer.finish();
   OCTOLOD_RETURN_IF_ERROR(streamed);
-  OCTOLOD_RETURN_IF_ERROR(written);
   result.sort = sorter.stats();
-  result.nodes = std::move(builder.nodes());
-  result.leaves.resize(result.nodes.size());
-  for (auto& [node, out] : writer.results())
-    result.leaves[static_cast<std::size_t>(node)] = std::move(out);
   result.stream_seconds = seconds_since(start);
+
+  // lods: the node work still queued and the upper levels, which wait for their children
+  start = Clock::now();
+  OCTOLOD_RETURN_IF_ERROR(
+      lod_tree.finish(builder.nodes(), [&](std::uint64_t nodes_done, std::uint64_t total) {
+        if (options.progress) options.progress("lods", nodes_done, total);
+      }));
+  result.lod_seconds = seconds_since(start);
+  result.nodes = std::move(builder.nodes());
+  result.lods = std::move(lod_tree.results());
+  result.lod_stats = lod_tree.stats();
   return result;
 }
-
 Manifest assemble_manifest(const BakeOptions& options, unsigned threads, const SoupResult& soup,
                            OctreeResult& octree) {
   Manifest m;
@@ -337,6 +216,7 @@ Manifest assemble_manifest(const BakeOptions& options, unsigned threads, const S
   m.parameters.max_depth = options.max_depth;
   m.parameters.memory_budget_bytes = options.memory_budget_bytes;
   m.parameters.threads = threads;
+  m.parameters.method = options.lods ? std::string(method_name(options.method)) : "";
   if (octree.nodes.empty()) {  // no triangles: a root leaf without LODs
     NodeInfo root;
     root.cell = octree.cube.cell(0, 0);
@@ -354,9 +234,9 @@ Manifest assemble_manifest(const BakeOptions& options, unsigned threads, const S
     n.children = o.children;
     n.cell = octree.cube.cell(o.prefix, o.depth);
     n.source_triangles = o.triangles;
-    if (octree.leaves[i]) {
-      n.bounds = octree.leaves[i]->bounds;
-      n.lods = std::move(octree.leaves[i]->lods);
+    if (octree.lods[i]) {
+      n.bounds = octree.lods[i]->bounds;
+      n.lods = std::move(octree.lods[i]->lods);
     }
   }
   // Children follow their parents: one backward sweep unites the bounds.
@@ -436,6 +316,10 @@ Result<BakeReport> run_bake(const BakeOptions& options) {
     manifest.stage_seconds["octree.sort"] = octree->sort_seconds;
     manifest.stage_seconds["octree.stream"] = octree->stream_seconds;
     manifest.stage_seconds["octree"] = octree->sort_seconds + octree->stream_seconds;
+    manifest.stage_seconds["lods"] = octree->lod_seconds;
+    manifest.stats["node_work_seconds"] = octree->lod_stats.work_seconds;
+    manifest.stats["lod_rereads"] = static_cast<double>(octree->lod_stats.reread_lods);
+    manifest.stats["lod_kept_bytes_peak"] = static_cast<double>(octree->lod_stats.peak_kept_bytes);
     report.soup_in_core = soup->in_core;
     report.sort_runs = octree->sort.runs;
     manifest.stats["soup_in_core"] = soup->in_core ? 1 : 0;
@@ -470,6 +354,20 @@ Result<BakeReport> run_bake(const BakeOptions& options) {
 }
 
 }  // namespace
+
+std::string_view method_name(ClusterMethod method) {
+  switch (method) {
+    case ClusterMethod::grid: return "grid";
+    case ClusterMethod::bade2006: return "bade2006";
+  }
+  return "grid";
+}
+
+std::optional<ClusterMethod> parse_method(std::string_view name) {
+  for (ClusterMethod m : {ClusterMethod::grid, ClusterMethod::bade2006})
+    if (method_name(m) == name) return m;
+  return std::nullopt;
+}
 
 Result<BakeReport> bake(const BakeOptions& options) {
   Result<BakeReport> result = run_bake(options);

@@ -1,11 +1,13 @@
 // octolod bake: a PLY mesh of any size becomes an on-disk LOD octree directory within a memory
-// budget (octolod/bake/bake.h; ARCHITECTURE.md stages 1-6).
+// budget (octolod/bake/bake.h; ARCHITECTURE.md stages 1-7): the octree, every node's LOD chain
+// (--method), the manifest.
 //
 // Exit codes: 1 usage, 2 bad input, 3 unsupported, 4 I/O (unwritable output, out of space, the
 // input vanishing while read). A failed or interrupted bake publishes nothing and leaves no
 // temporary file.
 #include <cstdio>
 #include <memory>
+#include <optional>
 #include <string>
 
 #include "command.h"
@@ -24,7 +26,19 @@ struct BakeArgs {
   std::string work_dir;
   unsigned threads = 0;
   bool out_of_core = false;
+  std::string method = "grid";
 };
+
+std::uint64_t lod_count(const Manifest& m) {
+  std::uint64_t n = 0;
+  for (const NodeInfo& node : m.nodes) n += node.lods.size();
+  return n;
+}
+
+// Triangles of the root's coarsest LOD: what the whole asset costs from far away.
+std::uint64_t root_coarsest_triangles(const Manifest& m) {
+  return m.nodes.empty() || m.nodes[0].lods.empty() ? 0 : m.nodes[0].lods.back().triangles;
+}
 
 nlohmann::json report_json(const bake::BakeReport& r, const std::string& output) {
   const Manifest& m = r.manifest;
@@ -44,8 +58,12 @@ nlohmann::json report_json(const bake::BakeReport& r, const std::string& output)
            {{"max_tris", m.parameters.max_tris},
             {"max_depth", m.parameters.max_depth},
             {"memory_budget_bytes", m.parameters.memory_budget_bytes},
-            {"threads", m.parameters.threads}}},
-          {"stage_seconds", m.stage_seconds}};
+            {"threads", m.parameters.threads},
+            {"method", m.parameters.method}}},
+          {"lods", lod_count(m)},
+          {"root_coarsest_triangles", root_coarsest_triangles(m)},
+          {"stage_seconds", m.stage_seconds},
+          {"stats", m.stats}};
 }
 
 int run_bake(const BakeArgs& args, const CommandContext& context) {
@@ -60,6 +78,13 @@ int run_bake(const BakeArgs& args, const CommandContext& context) {
   options.work_dir = args.work_dir;
   options.threads = args.threads;
   options.force_out_of_core = args.out_of_core;
+  if (args.method == "none") {
+    options.lods = false;
+  } else {
+    std::optional<bake::ClusterMethod> method = bake::parse_method(args.method);
+    if (!method) return report(usage_error("unknown --method '" + args.method + "'"));
+    options.method = *method;
+  }
   options.cleanup_on_signal = true;
   Progress progress(context);
   options.progress = [&](std::string_view stage, std::uint64_t done, std::uint64_t total) {
@@ -80,13 +105,16 @@ int run_bake(const BakeArgs& args, const CommandContext& context) {
     return 0;
   }
   std::printf(
-      "%s: %llu triangles (%s) -> %llu nodes, %llu leaves, depth %u, %.1f MB in %.2f s "
-      "(soup %.2f s, octree %.2f s), peak RSS %.1f MiB\n",
+      "%s: %llu triangles (%s) -> %llu nodes, %llu leaves, depth %u, %llu LODs (root's coarsest "
+      "%llu triangles), %.1f MB in %.2f s (soup %.2f s, octree + overlapping LODs %.2f s, LODs "
+      "after the stream %.2f s), peak RSS %.1f MiB\n",
       args.output.c_str(), static_cast<unsigned long long>(r.manifest.input_triangles),
       r.manifest.layout.describe().c_str(), static_cast<unsigned long long>(r.nodes),
-      static_cast<unsigned long long>(r.leaves), r.depth, static_cast<double>(r.bytes) / 1e6,
-      stage("total"), stage("soup"), stage("octree"),
-      static_cast<double>(r.peak_rss_bytes) / (1 << 20));
+      static_cast<unsigned long long>(r.leaves), r.depth,
+      static_cast<unsigned long long>(lod_count(r.manifest)),
+      static_cast<unsigned long long>(root_coarsest_triangles(r.manifest)),
+      static_cast<double>(r.bytes) / 1e6, stage("total"), stage("soup"), stage("octree"),
+      stage("lods"), static_cast<double>(r.peak_rss_bytes) / (1 << 20));
   return 0;
 }
 
@@ -117,6 +145,13 @@ void add_bake_command(CLI::App& app, CommandContext& context) {
   command->add_option("--work-dir", args->work_dir,
                       "Directory for temporary files (default: next to the output)");
   command->add_option("--threads", args->threads, "Worker threads (default: all cores)");
+  command
+      ->add_option("--method", args->method,
+                   "Clustering of the LODs: grid (cells inside each node) or bade2006 (the "
+                   "seed's one representative per node); none: leaves keep only their original "
+                   "triangles")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"grid", "bade2006", "none"}));
   command->add_flag("--out-of-core", args->out_of_core,
                     "Take the out-of-core soup path even when the vertices fit the budget");
   command->callback([args, &context] { context.exit_code = run_bake(*args, context); });

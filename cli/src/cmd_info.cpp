@@ -1,5 +1,7 @@
 // octolod info: what a baked tree holds, from its manifest alone (docs/formats.md): nodes,
-// leaves, depth, triangles per leaf, bytes, attribute layout, bake parameters, stage times.
+// leaves, depth, triangles per leaf, bytes, attribute layout, bake parameters, stage times, and
+// the LODs: per chain index and per depth their counts, triangles and error range, the root's
+// chain.
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
@@ -14,6 +16,31 @@
 namespace octolod::cli {
 namespace {
 
+// The LODs at one index of the chains (0 = every node's finest) or one octree depth.
+struct LodLevel {
+  std::uint64_t nodes = 0;  // nodes with a LOD there
+  std::uint64_t lods = 0;
+  std::uint64_t triangles = 0;  // per index: of that LOD; per depth: of the nodes' finest LODs
+  std::uint64_t coarsest_triangles = 0;  // per depth only: of the nodes' coarsest LODs
+  std::uint64_t vertices = 0;
+  double error_min = 0, error_max = 0;  // model units
+
+  void add_error(double e) {
+    error_min = lods == 0 ? e : std::min(error_min, e);
+    error_max = lods == 0 ? e : std::max(error_max, e);
+  }
+};
+
+nlohmann::json level_json(const LodLevel& l, bool by_depth) {
+  nlohmann::json j = {{"nodes", l.nodes},
+                      {"lods", l.lods},
+                      {"triangles", l.triangles},
+                      {"vertices", l.vertices},
+                      {"error", {{"min", l.error_min}, {"max", l.error_max}}}};
+  if (by_depth) j["coarsest_triangles"] = l.coarsest_triangles;
+  return j;
+}
+
 struct TreeSummary {
   std::uint64_t nodes = 0;
   std::uint64_t leaves = 0;
@@ -23,6 +50,8 @@ struct TreeSummary {
   std::uint64_t lod_bytes = 0;
   std::uint64_t manifest_bytes = 0;
   std::vector<std::uint64_t> nodes_per_depth;
+  std::vector<LodLevel> by_index;  // by LOD index
+  std::vector<LodLevel> by_depth;  // by node depth
 };
 
 TreeSummary summarize(const Manifest& m) {
@@ -39,6 +68,25 @@ TreeSummary summarize(const Manifest& m) {
     }
     s.lods += n.lods.size();
     for (const LodInfo& l : n.lods) s.lod_bytes += l.bytes;
+    if (n.lods.empty()) continue;
+    if (s.by_index.size() < n.lods.size()) s.by_index.resize(n.lods.size());
+    if (s.by_depth.size() <= n.depth) s.by_depth.resize(n.depth + 1);
+    LodLevel& d = s.by_depth[n.depth];
+    ++d.nodes;
+    d.triangles += n.lods.front().triangles;
+    d.coarsest_triangles += n.lods.back().triangles;
+    d.vertices += n.lods.front().vertices;
+    for (std::size_t i = 0; i < n.lods.size(); ++i) {
+      const LodInfo& l = n.lods[i];
+      LodLevel& x = s.by_index[i];
+      x.add_error(l.error);
+      ++x.nodes;
+      ++x.lods;
+      x.triangles += l.triangles;
+      x.vertices += l.vertices;
+      d.add_error(l.error);
+      ++d.lods;
+    }
   }
   if (!leaf_tris.empty()) {
     std::sort(leaf_tris.begin(), leaf_tris.end());
@@ -47,6 +95,40 @@ TreeSummary summarize(const Manifest& m) {
     s.leaf_tris_max = leaf_tris.back();
   }
   return s;
+}
+
+nlohmann::json levels_json(const std::vector<LodLevel>& levels, bool by_depth) {
+  nlohmann::json out = nlohmann::json::array();
+  for (const LodLevel& l : levels) out.push_back(level_json(l, by_depth));
+  return out;
+}
+
+nlohmann::json root_lods_json(const Manifest& m) {
+  nlohmann::json out = nlohmann::json::array();
+  if (m.nodes.empty()) return out;
+  for (const LodInfo& l : m.nodes[0].lods)
+    out.push_back({{"triangles", l.triangles}, {"vertices", l.vertices}, {"error", l.error},
+                   {"bytes", l.bytes}, {"file", l.file}});
+  return out;
+}
+
+void print_levels(const char* title, const char* key, const std::vector<LodLevel>& levels,
+                  bool by_depth) {
+  if (levels.empty()) return;
+  std::printf("%s\n  %-6s %8s %8s %12s %12s %12s  %s\n", title, key, "nodes", "LODs",
+              by_depth ? "tris finest" : "triangles", by_depth ? "tris coarsest" : "",
+              "vertices", "error min .. max (model units)");
+  for (std::size_t i = 0; i < levels.size(); ++i) {
+    const LodLevel& l = levels[i];
+    if (l.nodes == 0) continue;
+    char coarsest[32] = "";
+    if (by_depth)
+      std::snprintf(coarsest, sizeof coarsest, "%llu", static_cast<unsigned long long>(l.coarsest_triangles));
+    std::printf("  %-6zu %8llu %8llu %12llu %12s %12llu  %.6g .. %.6g\n", i,
+                static_cast<unsigned long long>(l.nodes), static_cast<unsigned long long>(l.lods),
+                static_cast<unsigned long long>(l.triangles), coarsest,
+                static_cast<unsigned long long>(l.vertices), l.error_min, l.error_max);
+  }
 }
 
 int run_info(const std::string& tree, const CommandContext& context) {
@@ -85,7 +167,10 @@ int run_info(const std::string& tree, const CommandContext& context) {
                   {"threads", p.threads},
                   {"method", p.method}}},
                 {"stage_seconds", m.stage_seconds},
-                {"stats", m.stats}});
+                {"stats", m.stats},
+                {"lod_levels", levels_json(s.by_index, false)},
+                {"lod_depths", levels_json(s.by_depth, true)},
+                {"root_lods", root_lods_json(m)}});
     return 0;
   }
   std::printf("tree        %s (manifest version %u)\n", tree.c_str(), m.version);
@@ -112,6 +197,14 @@ int run_info(const std::string& tree, const CommandContext& context) {
   std::printf("parameters  max-tris %u, max-depth %u, memory %.1f MiB, threads %u%s%s\n",
               p.max_tris, p.max_depth, static_cast<double>(p.memory_budget_bytes) / (1 << 20),
               p.threads, p.method.empty() ? "" : ", method ", p.method.c_str());
+  print_levels("LOD index (0 = each node's finest)", "index", s.by_index, false);
+  print_levels("per depth", "depth", s.by_depth, true);
+  if (!m.nodes.empty() && !m.nodes[0].lods.empty()) {
+    std::printf("root LODs  ");
+    for (const LodInfo& l : m.nodes[0].lods)
+      std::printf(" %u tris (error %.6g)", l.triangles, l.error);
+    std::printf("\n");
+  }
   if (!m.stage_seconds.empty()) {
     std::printf("seconds    ");
     for (const auto& [stage, seconds] : m.stage_seconds) std::printf(" %s %.3f", stage.c_str(), seconds);
@@ -130,7 +223,7 @@ int run_info(const std::string& tree, const CommandContext& context) {
 void add_info_command(CLI::App& app, CommandContext& context) {
   auto tree = std::make_shared<std::string>();
   CLI::App* command =
-      app.add_subcommand("info", "Summarize a baked tree: nodes, leaves, sizes, parameters, times");
+      app.add_subcommand("info", "Summarize a baked tree: nodes, leaves, LODs (triangles, errors), sizes, parameters, times");
   command->add_option("tree", *tree, "Baked tree directory (holds manifest.json)")->required();
   command->callback([tree, &context] { context.exit_code = run_info(*tree, context); });
 }

@@ -6,8 +6,13 @@
 //             bounding cube (external merge sort), and one streaming pass over the sorted
 //             records decides the tree (a node splits while it holds more than max_tris
 //             triangles and is shallower than max_depth) and hands every leaf its contiguous
-//             run of triangles; each leaf is indexed (exact vertex dedup) and written as its
-//             finest LOD, lod0.olod, on worker threads
+//             run of triangles
+//   lods      meanwhile, on worker threads, heaviest ready node first: each leaf is indexed
+//             (exact vertex dedup) into its LOD 0 (the original triangles, error 0) and a chain
+//             of simplifications (simplify.h); every internal node, once its children are done,
+//             simplifies the merge of their first simplified LODs; nodes near the root continue
+//             into a coarse chain down to about 256 triangles. Files lod<i>.olod, finest first,
+//             each with a conservative error in model units.
 //   manifest  manifest.json at the root (octolod/formats/manifest.h)
 //
 // Output: OUT_DIR/manifest.json and one directory per node, children in sub-directories "0".."7"
@@ -15,22 +20,31 @@
 // renamed into place only when complete: a failed or interrupted bake leaves no OUT_DIR (or the
 // previous one, untouched) and no temporary file.
 //
-// The output depends only on the input and (max_tris, max_depth): not on the budget, the thread
-// count or the work directory (the manifest's parameters, stage_seconds and stats aside).
+// The output depends only on the input and (max_tris, max_depth, lods, method): not on the
+// budget, the thread count or the work directory (the manifest's parameters, stage_seconds and
+// stats aside).
+//
+// Memory: the soup stage, then the octree sort, the leaf queue, the node work in flight and the
+// children's LODs kept for their parents share the budget; kept LODs beyond their share are
+// re-read from their files by the parent. Peak RSS is about the budget plus the program's
+// fixed footprint.
 #pragma once
 
 #include <cstdint>
 #include <filesystem>
 #include <functional>
+#include <optional>
 #include <string_view>
 
+#include "octolod/bake/simplify.h"
 #include "octolod/formats/manifest.h"
 #include "octolod/formats/status.h"
 
 namespace octolod::bake {
 
 // Called from the bake's calling thread: stage is "split", "dereference 0..2" (the soup), "sort"
-// (the octree's run formation), "octree" (the streaming pass); `done` of `total` items.
+// (the octree's run formation), "octree" (the streaming pass; `done` of `total` triangles),
+// "lods" (the node work left after the stream; `done` of `total` nodes).
 using BakeProgressFn =
     std::function<void(std::string_view stage, std::uint64_t done, std::uint64_t total)>;
 
@@ -51,7 +65,7 @@ struct BakeOptions {
   // Where the temporary files go (inside a fresh ".octolod-tmp-*" directory); empty: next to
   // the output. Needs room for about two soups (3 x vertex bytes + 4 per triangle, twice).
   std::filesystem::path work_dir;
-  // Threads for the sorts and the leaf writers; 0 = hardware concurrency. The output does not
+  // Threads for the sorts and the node work; 0 = hardware concurrency. The output does not
   // depend on it.
   unsigned threads = 0;
   // Take the soup stage's out-of-core path even when the vertices would fit (tests, benchmarks).
@@ -60,8 +74,19 @@ struct BakeOptions {
   // removed and the process dies by that signal. For programs; libraries embedding the bake
   // may prefer their own handling.
   bool cleanup_on_signal = false;
+  // Build the LOD hierarchy (lod_tree: leaves from their original triangles, internal nodes
+  // from their children's first simplified LODs, coarse chains near the root). false: the
+  // leaves hold only their original triangles (lod0) and internal nodes have no LOD.
+  bool lods = true;
+  // Clustering operator of every simplification step (simplify.h). The output depends on it.
+  ClusterMethod method = ClusterMethod::grid;
   BakeProgressFn progress;
 };
+
+// "grid" / "bade2006": the names of the CLI's --method and of the manifest's parameters.method.
+std::string_view method_name(ClusterMethod method);
+// The method named `name`; nullopt for an unknown name.
+std::optional<ClusterMethod> parse_method(std::string_view name);
 
 inline constexpr std::uint64_t kMinBakeBudget = std::uint64_t{1} << 20;
 

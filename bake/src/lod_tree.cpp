@@ -1,0 +1,418 @@
+// The bake's LOD hierarchy, scheduled bottom-up on the worker threads while the octree stream
+// runs (seed 3.5.3, 5.3.2), see lod_tree.h.
+#include "lod_tree.h"
+
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <condition_variable>
+#include <mutex>
+#include <string>
+#include <system_error>
+#include <thread>
+#include <utility>
+
+#include "node_index.h"
+#include "octolod/formats/node_file.h"
+#include "temp_dir.h"
+
+namespace octolod::bake {
+namespace {
+
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+
+std::size_t mesh_bytes(const NodeMesh& mesh) {
+  return (mesh.vertices.size() + mesh.indices.size()) * sizeof(float);
+}
+
+// A child's first simplified LOD as its parent will merge it.
+struct ChildLod {
+  bool present = false;
+  bool in_memory = false;  // else re-read `file`
+  NodeMesh mesh;
+  std::string file;
+  double error = 0;
+  std::size_t bytes = 0;  // counted in the kept bytes while in memory
+};
+
+// The scheduler's view of one octree node.
+struct Slot {
+  std::int32_t parent = -1;
+  std::uint32_t octant = 0;  // in the parent
+  std::string dir;           // "" for the root
+  Bounds cell;
+  bool closed = false;       // internal node whose children are all known
+  std::uint32_t children = 0;
+  std::uint32_t done = 0;    // children whose chains are complete
+  std::uint64_t child_triangles = 0;
+  std::array<ChildLod, 8> child;
+};
+
+struct Task {
+  std::int32_t node = -1;
+  std::uint64_t weight = 0;  // input triangles
+  std::vector<std::byte> records;  // a leaf's soup records; empty for an internal node
+  bool leaf = false;
+};
+
+// Max-heap order. Internal nodes first, heaviest first (they free their children's kept LODs
+// and their chains are the long tail near the root); leaves in stream order (node indices grow
+// with it), so a small leaf is never passed over for long: its parent, and every kept sibling
+// LOD, waits for it.
+bool later(const Task& a, const Task& b) {
+  if (a.leaf != b.leaf) return a.leaf;
+  if (!a.leaf && a.weight != b.weight) return a.weight < b.weight;
+  return a.node > b.node;
+}
+
+// What a finished node hands back to the scheduler.
+struct NodeDone {
+  NodeLods lods;
+  NodeMesh first;  // the first simplified LOD (or LOD 0), for the parent
+  std::size_t first_index = 0;
+  double first_error = 0;
+};
+
+// A thread's reusable buffers.
+struct Scratch {
+  NodeIndexer indexer;
+};
+
+Status interrupted() { return io_error("bake interrupted by a signal"); }
+
+}  // namespace
+
+class LodTreeBuilder::Impl {
+ public:
+  explicit Impl(LodTreeOptions options) : options_(std::move(options)) {
+    for (unsigned i = 0; i < options_.workers; ++i) threads_.emplace_back([this] { work(); });
+  }
+  ~Impl() { stop(); }
+
+  Status add_leaf(std::int32_t node, const std::vector<OctreeNode>& nodes,
+                  std::vector<std::byte>&& records) {
+    std::unique_lock lock(mutex_);
+    if (!error_.ok()) return error_;
+    register_nodes(nodes);
+    close_off_path(node, nodes);
+    Task task;
+    task.node = node;
+    task.leaf = true;
+    task.weight = nodes[static_cast<std::size_t>(node)].triangles;
+    queued_bytes_ += records.size();
+    task.records = std::move(records);
+    push(std::move(task));
+    // Without workers the caller does everything now; with them, it runs node work itself
+    // rather than let the queue grow past queue_bytes.
+    while (error_.ok()) {
+      if (threads_.empty()) {
+        if (heap_.empty()) break;
+      } else if (queued_bytes_ <= options_.queue_bytes) {
+        break;
+      } else if (heap_.empty()) {
+        space_.wait(lock);
+        continue;
+      }
+      run_one(lock, caller_scratch_);
+    }
+    return error_;
+  }
+
+  Status finish(const std::vector<OctreeNode>& nodes,
+                const std::function<void(std::uint64_t, std::uint64_t)>& progress) {
+    {
+      std::unique_lock lock(mutex_);
+      register_nodes(nodes);
+      while (!open_.empty()) {
+        close(open_.back(), nodes);
+        open_.pop_back();
+      }
+      total_nodes_ = nodes.size();
+      work_.notify_all();
+      // The caller works too until nothing is left. Every condition is checked again after
+      // the lock was released (run_one, progress), so no completion is missed.
+      std::uint64_t reported = ~std::uint64_t{0};
+      while (error_.ok() && completed_ < total_nodes_) {
+        if (!heap_.empty()) {
+          run_one(lock, caller_scratch_);
+        } else if (progress && reported != completed_) {
+          reported = completed_;
+          lock.unlock();
+          progress(reported, total_nodes_);
+          lock.lock();
+        } else {
+          space_.wait(lock);
+        }
+      }
+    }
+    stop();
+    std::lock_guard lock(mutex_);
+    if (error_.ok() && progress) progress(completed_, total_nodes_);
+    return error_;
+  }
+
+  std::vector<std::optional<NodeLods>>& results() { return results_; }
+  const LodTreeStats& stats() const { return stats_; }
+
+ private:
+  // Slots for the nodes the builder created since the last call (their parent, octant, path and
+  // cell never change once created). Under the lock.
+  void register_nodes(const std::vector<OctreeNode>& nodes) {
+    for (std::size_t i = slots_.size(); i < nodes.size(); ++i) {
+      const OctreeNode& n = nodes[i];
+      Slot s;
+      s.parent = n.parent;
+      s.octant = static_cast<std::uint32_t>(n.prefix & 7u);
+      s.dir = n.path();
+      s.cell = options_.cube.cell(n.prefix, n.depth);
+      slots_.push_back(std::move(s));
+    }
+    results_.resize(slots_.size());
+  }
+
+  // Keys arrive in order: the internal nodes on the previous leaf's path that are not on this
+  // leaf's path have received all their children. Under the lock.
+  void close_off_path(std::int32_t leaf, const std::vector<OctreeNode>& nodes) {
+    std::vector<std::int32_t> path;
+    for (std::int32_t p = nodes[static_cast<std::size_t>(leaf)].parent; p >= 0;
+         p = nodes[static_cast<std::size_t>(p)].parent)
+      path.push_back(p);
+    std::reverse(path.begin(), path.end());
+    std::size_t common = 0;
+    while (common < open_.size() && common < path.size() && open_[common] == path[common])
+      ++common;
+    while (open_.size() > common) {
+      close(open_.back(), nodes);
+      open_.pop_back();
+    }
+    open_ = std::move(path);
+  }
+
+  void close(std::int32_t node, const std::vector<OctreeNode>& nodes) {
+    Slot& s = slots_[static_cast<std::size_t>(node)];
+    s.closed = true;
+    for (std::int32_t c : nodes[static_cast<std::size_t>(node)].children) s.children += c >= 0;
+    if (s.done == s.children) push_internal(node);
+  }
+
+  void push_internal(std::int32_t node) {
+    Task task;
+    task.node = node;
+    task.weight = slots_[static_cast<std::size_t>(node)].child_triangles;
+    push(std::move(task));
+  }
+
+  void push(Task task) {
+    heap_.push_back(std::move(task));
+    std::push_heap(heap_.begin(), heap_.end(), later);
+    work_.notify_one();
+  }
+
+  // Pops the heaviest ready node and runs it with the lock released. Under the lock.
+  void run_one(std::unique_lock<std::mutex>& lock, Scratch& scratch) {
+    std::pop_heap(heap_.begin(), heap_.end(), later);
+    Task task = std::move(heap_.back());
+    heap_.pop_back();
+    const Slot& slot = slots_[static_cast<std::size_t>(task.node)];
+    const std::string dir = slot.dir;
+    const Bounds cell = slot.cell;
+    std::array<ChildLod, 8> children;
+    if (!task.leaf) children = std::move(slots_[static_cast<std::size_t>(task.node)].child);
+    lock.unlock();
+
+    const std::size_t record_bytes = task.records.size();
+    const auto start = Clock::now();
+    Result<NodeDone> done = task.leaf ? run_leaf(task, dir, cell, scratch)
+                                      : run_internal(children, dir, cell);
+    std::size_t released = 0;
+    std::uint64_t rereads = 0;
+    for (ChildLod& c : children) {
+      if (c.present && c.in_memory) released += c.bytes;
+      if (c.present && !c.in_memory) ++rereads;
+      c = {};
+    }
+    const double seconds = std::chrono::duration<double>(Clock::now() - start).count();
+
+    lock.lock();
+    stats_.work_seconds += seconds;
+    stats_.reread_lods += rereads;
+    kept_bytes_ -= released;
+    queued_bytes_ -= record_bytes;
+    if (!done.ok()) {
+      if (error_.ok()) error_ = done.status();
+    } else if (error_.ok()) {
+      deliver(task.node, std::move(done).value());
+    }
+    space_.notify_all();
+    work_.notify_all();
+  }
+
+  Result<NodeDone> run_leaf(Task& task, const std::string& dir, const Bounds& cell,
+                            Scratch& scratch) {
+    if (cleanup_signal_received()) return interrupted();
+    OCTOLOD_RETURN_IF_ERROR(make_directory(dir));
+    NodeMesh mesh;
+    scratch.indexer.index(task.records, options_.layout, mesh);
+    task.records = {};  // the queue's bytes are given back in run_one
+    if (!options_.build_lods) {
+      std::vector<Lod> lods(1);
+      lods[0].mesh = std::move(mesh);
+      return write_lods(dir, lods);
+    }
+    LodOptions o = options_.lod;
+    o.include_input = true;
+    auto lods = build_lods(std::move(mesh), 0.0, cell, o);
+    if (!lods.ok()) return lods.status();
+    return write_lods(dir, lods.value());
+  }
+
+  Result<NodeDone> run_internal(std::array<ChildLod, 8>& children, const std::string& dir,
+                                const Bounds& cell) {
+    if (cleanup_signal_received()) return interrupted();
+    if (!options_.build_lods) return NodeDone{};
+    double input_error = 0;
+    std::vector<const NodeMesh*> meshes;
+    for (ChildLod& c : children) {
+      if (!c.present) continue;
+      if (!c.in_memory) {
+        auto read = read_node_file(options_.root / c.file);
+        if (!read.ok()) return read.status();
+        c.mesh = std::move(read).value();
+      }
+      input_error = std::max(input_error, c.error);
+      meshes.push_back(&c.mesh);
+    }
+    NodeMesh merged = merge_meshes(meshes);
+    for (ChildLod& c : children) c.mesh = {};
+    LodOptions o = options_.lod;
+    o.include_input = false;
+    auto lods = build_lods(std::move(merged), input_error, cell, o);
+    if (!lods.ok()) return lods.status();
+    return write_lods(dir, lods.value());
+  }
+
+  Status make_directory(const std::string& dir) const {
+    if (dir.empty()) return {};
+    std::error_code ec;
+    fs::create_directories(options_.root / dir, ec);
+    if (ec) {
+      return io_error("cannot create node directory '" + (options_.root / dir).string() +
+                      "': " + ec.message());
+    }
+    return {};
+  }
+
+  // Writes lod<i>.olod for every LOD; the first simplified one is kept for the parent.
+  Result<NodeDone> write_lods(const std::string& dir, std::vector<Lod>& lods) const {
+    OCTOLOD_RETURN_IF_ERROR(make_directory(dir));
+    NodeDone done;
+    for (std::size_t i = 0; i < lods.size(); ++i) {
+      const NodeMesh& mesh = lods[i].mesh;
+      const std::string file = (dir.empty() ? "" : dir + "/") + "lod" + std::to_string(i) + ".olod";
+      OCTOLOD_RETURN_IF_ERROR(write_node_file(options_.root / file, mesh));
+      LodInfo info;
+      info.triangles = static_cast<std::uint32_t>(mesh.triangle_count());
+      info.vertices = static_cast<std::uint32_t>(mesh.vertex_count());
+      info.error = lods[i].error;
+      info.bytes = node_file_size(mesh);
+      info.file = file;
+      done.lods.bounds.extend(mesh.bounds());
+      done.lods.lods.push_back(std::move(info));
+    }
+    if (!lods.empty()) {
+      done.first_index = lods.size() > 1 ? 1 : 0;
+      done.first_error = lods[done.first_index].error;
+      done.first = std::move(lods[done.first_index].mesh);
+    }
+    return done;
+  }
+
+  // A node's chain is complete: record it and hand its first simplified LOD to the parent,
+  // which becomes ready with its last child. Under the lock.
+  void deliver(std::int32_t node, NodeDone done) {
+    ++completed_;
+    const Slot& s = slots_[static_cast<std::size_t>(node)];
+    const std::int32_t parent = s.parent;
+    const std::uint32_t octant = s.octant;
+    const bool has_lod = !done.lods.lods.empty();
+    const std::string first_file = has_lod ? done.lods.lods[done.first_index].file : "";
+    results_[static_cast<std::size_t>(node)] = std::move(done.lods);
+    if (parent < 0) return;
+    Slot& p = slots_[static_cast<std::size_t>(parent)];
+    ++p.done;
+    if (has_lod) {
+      ChildLod& c = p.child[octant];
+      c.present = true;
+      c.error = done.first_error;
+      c.file = first_file;
+      p.child_triangles += done.first.triangle_count();
+      const std::size_t bytes = mesh_bytes(done.first);
+      if (kept_bytes_ + bytes <= options_.keep_bytes) {
+        c.in_memory = true;
+        c.bytes = bytes;
+        c.mesh = std::move(done.first);
+        kept_bytes_ += bytes;
+        stats_.peak_kept_bytes = std::max<std::uint64_t>(stats_.peak_kept_bytes, kept_bytes_);
+      }
+    }
+    if (p.closed && p.done == p.children) push_internal(parent);
+  }
+
+  void work() {
+    Scratch scratch;
+    std::unique_lock lock(mutex_);
+    for (;;) {
+      work_.wait(lock, [&] { return stopping_ || !error_.ok() || !heap_.empty(); });
+      if (stopping_ || !error_.ok()) return;
+      run_one(lock, scratch);
+    }
+  }
+
+  void stop() {
+    {
+      std::lock_guard lock(mutex_);
+      stopping_ = true;
+    }
+    work_.notify_all();
+    for (std::thread& t : threads_) t.join();
+    threads_.clear();
+  }
+
+  const LodTreeOptions options_;
+  std::vector<std::thread> threads_;
+  std::mutex mutex_;
+  std::condition_variable work_;   // tasks or stop for the workers
+  std::condition_variable space_;  // a task finished: queue room, progress, new tasks
+  std::vector<Task> heap_;         // ready nodes, heaviest on top
+  std::vector<Slot> slots_;        // by node index
+  std::vector<std::int32_t> open_; // internal nodes on the last leaf's path, root first
+  std::vector<std::optional<NodeLods>> results_;
+  std::size_t queued_bytes_ = 0;   // records of leaves not yet done
+  std::size_t kept_bytes_ = 0;     // children's LODs held for their parents
+  std::uint64_t completed_ = 0;
+  std::uint64_t total_nodes_ = 0;
+  bool stopping_ = false;
+  Status error_;
+  Scratch caller_scratch_;
+  LodTreeStats stats_;
+};
+
+LodTreeBuilder::LodTreeBuilder(LodTreeOptions options)
+    : impl_(std::make_unique<Impl>(std::move(options))) {}
+LodTreeBuilder::~LodTreeBuilder() = default;
+
+Status LodTreeBuilder::add_leaf(std::int32_t node, const std::vector<OctreeNode>& nodes,
+                                std::vector<std::byte>&& records) {
+  return impl_->add_leaf(node, nodes, std::move(records));
+}
+
+Status LodTreeBuilder::finish(const std::vector<OctreeNode>& nodes,
+                              const std::function<void(std::uint64_t, std::uint64_t)>& progress) {
+  return impl_->finish(nodes, progress);
+}
+
+std::vector<std::optional<NodeLods>>& LodTreeBuilder::results() { return impl_->results(); }
+const LodTreeStats& LodTreeBuilder::stats() const { return impl_->stats(); }
+
+}  // namespace octolod::bake

@@ -1,0 +1,96 @@
+// The LOD hierarchy of a bake (seed 3.5.3, 5.3.2; ARCHITECTURE.md stages 5 and 7), built while
+// the octree stream hands out its leaves:
+//
+//   leaf      its triangles are indexed (node_index.h) and become LOD 0 (the original, error 0);
+//             build_lods continues the chain from it
+//   internal  once the stream has left its key range (all its children are known) and every
+//             child's chain is done: merge_meshes of the children's first simplified LODs (LOD 1,
+//             or LOD 0 of a child that has only one), in octant order, with input error = the max
+//             of those LODs' errors; build_lods from there. Bottom-up whatever the tree's balance.
+//
+// Every node's chain ends at LodOptions::min_triangles or where its locked boundary stops the
+// halving, so the nodes near the root (few locked edges) continue into a coarse chain. Errors
+// accumulate along the chains (simplify.h), so every stored error is conservative with respect
+// to the original triangles of the node's region.
+//
+// Node work runs on the worker threads and on the caller (while the leaf queue is full and in
+// finish()): ready internal nodes first, heaviest first (El-Sana & Varshney: octree cells
+// processed in parallel, heaviest first), then leaves in stream order, so no small leaf holds
+// up its parent (and the siblings' kept LODs) for long. A node's files depend only on its own input, which depends only on the
+// input mesh and the options: the output is the same for any thread count and schedule.
+//
+// Memory: the leaves waiting for a thread (queue_bytes), the node work in flight, and the
+// children's first simplified LODs kept for their pending parents up to keep_bytes; past that,
+// a child's LOD is dropped and its parent re-reads it from the child's file (identical bytes).
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <memory>
+#include <optional>
+#include <string_view>
+#include <vector>
+
+#include "morton.h"
+#include "octolod/bake/simplify.h"
+#include "octolod/formats/manifest.h"
+#include "octolod/formats/status.h"
+#include "octolod/formats/vertex_layout.h"
+#include "octree_build.h"
+
+namespace octolod::bake {
+
+// What the LOD stage produced for one node.
+struct NodeLods {
+  Bounds bounds;              // tight bounds of every LOD of the node, model units
+  std::vector<LodInfo> lods;  // finest first, files relative to the tree root
+};
+
+struct LodTreeOptions {
+  std::filesystem::path root;  // the tree being written: node files go to root / node path
+  VertexLayout layout;         // of the leaves' soup records
+  RootCube cube;               // the octree's root cube (node cells)
+  // false: leaves get only LOD 0 (their original triangles), internal nodes no LOD.
+  bool build_lods = true;
+  // Method, min_triangles, reduction, max_lods of every chain (include_input is set per node).
+  LodOptions lod;
+  unsigned workers = 0;         // threads besides the caller; 0: the caller does all node work
+  std::size_t queue_bytes = 0;  // leaf records waiting for a thread (one leaf always fits)
+  std::size_t keep_bytes = 0;   // children's LODs kept in memory for their parents
+};
+
+struct LodTreeStats {
+  double work_seconds = 0;  // node work summed over threads (indexing, LOD chains, files)
+  std::uint64_t reread_lods = 0;  // children's LODs a parent re-read from their files
+  std::uint64_t peak_kept_bytes = 0;
+};
+
+class LodTreeBuilder {
+ public:
+  explicit LodTreeBuilder(LodTreeOptions options);
+  ~LodTreeBuilder();
+  LodTreeBuilder(const LodTreeBuilder&) = delete;
+  LodTreeBuilder& operator=(const LodTreeBuilder&) = delete;
+
+  // The octree stream's next leaf (OctreeBuilder's LeafFn, key order); `nodes` is the builder's
+  // tree so far. Returns once the leaf is queued; while the queue holds more than queue_bytes,
+  // the caller runs node work itself or waits. The first error of any node work ends the build.
+  Status add_leaf(std::int32_t node, const std::vector<OctreeNode>& nodes,
+                  std::vector<std::byte>&& records);
+  // After OctreeBuilder::finish(): the remaining node work, on the caller and the workers.
+  // `progress(done, total)` is called on the caller as nodes complete. The first error.
+  Status finish(const std::vector<OctreeNode>& nodes,
+                const std::function<void(std::uint64_t, std::uint64_t)>& progress);
+
+  // By node index; complete after a successful finish().
+  std::vector<std::optional<NodeLods>>& results();
+  const LodTreeStats& stats() const;
+
+ private:
+  class Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace octolod::bake

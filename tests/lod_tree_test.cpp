@@ -1,0 +1,402 @@
+// The bake's LOD hierarchy (seed 3.5.3, 5.3.2; ARCHITECTURE.md stage 5; issue 4 "Checked by"):
+// every node has a LOD chain, any mix of node LODs that covers a closed model is closed (no
+// crack), every stored error bounds the measured distance from the node's original triangles,
+// and the tree is the same for any thread count.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <array>
+#include <bit>
+#include <cmath>
+#include <cstdint>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <map>
+#include <random>
+#include <string>
+#include <unordered_map>
+#include <utility>
+#include <vector>
+
+#include "octolod/bake/bake.h"
+#include "octolod/formats/manifest.h"
+#include "octolod/formats/node_file.h"
+#include "octolod/measure/triangle_bvh.h"
+#include "octolod/samplegen/sample_generator.h"
+
+namespace octolod::bake {
+namespace {
+
+namespace fs = std::filesystem;
+
+// Sanitized and unoptimized builds run the same checks on smaller inputs (CI time).
+#if defined(__SANITIZE_ADDRESS__) || !defined(NDEBUG)
+constexpr std::uint64_t kScale = 5;
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+constexpr std::uint64_t kScale = 5;
+#else
+constexpr std::uint64_t kScale = 1;
+#endif
+#else
+constexpr std::uint64_t kScale = 1;
+#endif
+
+// A baked tree with every node's LOD meshes loaded.
+struct LoadedTree {
+  Manifest manifest;
+  std::vector<std::vector<NodeMesh>> lods;  // by node, finest first
+};
+
+LoadedTree load_tree(const fs::path& dir) {
+  LoadedTree t;
+  auto m = read_manifest(dir / "manifest.json");
+  EXPECT_TRUE(m.ok()) << m.status().message();
+  if (!m.ok()) return t;
+  t.manifest = std::move(m).value();
+  for (const NodeInfo& n : t.manifest.nodes) {
+    t.lods.emplace_back();
+    for (const LodInfo& l : n.lods) {
+      auto mesh = read_node_file(dir / l.file);
+      EXPECT_TRUE(mesh.ok()) << mesh.status().message();
+      t.lods.back().push_back(mesh.ok() ? std::move(mesh).value() : NodeMesh{});
+    }
+  }
+  return t;
+}
+
+// Inputs generated once for the suite: a closed rock, a city (closed boxes on a ground quad),
+// and a 200K rock for the error bounds.
+class LodTreeTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    root_ = fs::temp_directory_path() / ("octolod-lod-tree-test-" + std::to_string(::getpid()));
+    fs::remove_all(root_);
+    fs::create_directories(root_ / "work");
+    samplegen::SampleSpec spec;
+    spec.shape = samplegen::Shape::rock;
+    spec.triangles = 60'000 / kScale;
+    ASSERT_TRUE(samplegen::write_sample_ply(spec, rock_ply()).ok());
+    spec.shape = samplegen::Shape::city;
+    spec.triangles = 60'000 / kScale;
+    ASSERT_TRUE(samplegen::write_sample_ply(spec, city_ply()).ok());
+    spec.shape = samplegen::Shape::rock;
+    spec.triangles = 200'000 / kScale;
+    spec.seed = 7;
+    ASSERT_TRUE(samplegen::write_sample_ply(spec, big_rock_ply()).ok());
+  }
+  static void TearDownTestSuite() { fs::remove_all(root_); }
+
+  static fs::path rock_ply() { return root_ / "rock.ply"; }
+  static fs::path city_ply() { return root_ / "city.ply"; }
+  static fs::path big_rock_ply() { return root_ / "rock200k.ply"; }
+
+  // Bakes `input` into a fresh directory named `name`.
+  static BakeOptions options(const fs::path& input, const std::string& name) {
+    BakeOptions o;
+    o.input = input;
+    o.output = root_ / name;
+    o.max_tris = static_cast<std::uint32_t>(1000 / kScale);
+    o.max_depth = 8;
+    o.memory_budget_bytes = 16 << 20;
+    o.work_dir = root_ / "work";
+    o.threads = 2;
+    return o;
+  }
+  static LoadedTree bake_and_load(const BakeOptions& o) {
+    auto r = bake(o);
+    EXPECT_TRUE(r.ok()) << r.status().message();
+    return load_tree(o.output);
+  }
+
+  static fs::path root_;
+};
+
+fs::path LodTreeTest::root_;
+
+// --- the chains ---
+
+TEST_F(LodTreeTest, EveryNodeHasAChainWhoseErrorsGrowAsItsTrianglesShrink) {
+  const LoadedTree t = bake_and_load(options(rock_ply(), "chains"));
+  const Manifest& m = t.manifest;
+  ASSERT_GT(m.nodes.size(), 9u);
+  EXPECT_EQ(m.parameters.method, "grid");
+  std::size_t internal = 0;
+  for (std::size_t i = 0; i < m.nodes.size(); ++i) {
+    const NodeInfo& n = m.nodes[i];
+    ASSERT_FALSE(n.lods.empty()) << "node '" << n.path << "' has no LOD";
+    for (std::size_t k = 0; k < n.lods.size(); ++k) {
+      const LodInfo& l = n.lods[k];
+      const NodeMesh& mesh = t.lods[i][k];
+      EXPECT_EQ(l.file, (n.path.empty() ? "" : n.path + "/") + "lod" + std::to_string(k) + ".olod");
+      EXPECT_EQ(mesh.triangle_count(), l.triangles);
+      EXPECT_EQ(mesh.vertex_count(), l.vertices);
+      EXPECT_EQ(fs::file_size(root_ / "chains" / l.file), l.bytes);
+      EXPECT_TRUE(std::isfinite(l.error));
+      Bounds b = n.bounds;
+      b.extend(mesh.bounds());
+      EXPECT_EQ(b, n.bounds) << "LOD " << k << " of '" << n.path << "' sticks out of its bounds";
+      if (k > 0) {
+        // Each step at most halves (build_lods' reduction), and errors accumulate.
+        EXPECT_LE(2 * l.triangles, n.lods[k - 1].triangles) << n.path << " LOD " << k;
+        EXPECT_GE(l.error, n.lods[k - 1].error) << n.path << " LOD " << k;
+      }
+    }
+    if (n.is_leaf()) {
+      EXPECT_EQ(n.lods[0].error, 0.0);
+      EXPECT_EQ(n.lods[0].triangles, n.source_triangles);
+      continue;
+    }
+    ++internal;
+    // An internal node is simplified from its children's first simplified LODs: its error is
+    // at least theirs, and its finest LOD is smaller than their sum.
+    std::uint64_t merged = 0;
+    double children_error = 0;
+    for (std::int32_t c : n.children) {
+      if (c < 0) continue;
+      const NodeInfo& child = m.nodes[static_cast<std::size_t>(c)];
+      const LodInfo& first = child.lods[child.lods.size() > 1 ? 1 : 0];
+      merged += first.triangles;
+      children_error = std::max(children_error, first.error);
+    }
+    EXPECT_GE(n.lods[0].error, children_error) << n.path;
+    EXPECT_LE(n.lods[0].triangles, merged) << n.path;
+  }
+  EXPECT_GT(internal, 0u);
+  // The root continues into a coarse chain: a distant rock costs a few hundred triangles.
+  const NodeInfo& root = m.nodes[0];
+  EXPECT_GE(root.lods.size(), 2u);
+  EXPECT_LE(root.lods.back().triangles, 2u * 256u);
+  EXPECT_GT(root.lods.back().error, 0.0);
+}
+
+TEST_F(LodTreeTest, OneAndTwoThreadsWriteIdenticalLodTreesWithEitherMethod) {
+  for (const ClusterMethod method : {ClusterMethod::grid, ClusterMethod::bade2006}) {
+    const std::string name(method_name(method));
+    BakeOptions one = options(rock_ply(), "one-" + name);
+    one.threads = 1;
+    one.method = method;
+    BakeOptions two = options(rock_ply(), "two-" + name);
+    two.threads = 2;
+    two.method = method;
+    ASSERT_TRUE(bake(one).ok());
+    ASSERT_TRUE(bake(two).ok());
+    const LoadedTree a = load_tree(one.output);
+    const LoadedTree b = load_tree(two.output);
+    EXPECT_EQ(a.manifest.parameters.method, name);
+    ASSERT_EQ(a.manifest.nodes.size(), b.manifest.nodes.size());
+    std::size_t lods = 0;
+    for (std::size_t i = 0; i < a.manifest.nodes.size(); ++i) {
+      const NodeInfo& x = a.manifest.nodes[i];
+      const NodeInfo& y = b.manifest.nodes[i];
+      ASSERT_EQ(x.lods.size(), y.lods.size()) << x.path;
+      for (std::size_t k = 0; k < x.lods.size(); ++k) {
+        EXPECT_EQ(x.lods[k].error, y.lods[k].error) << x.path << " LOD " << k;
+        EXPECT_EQ(x.lods[k].triangles, y.lods[k].triangles);
+        EXPECT_TRUE(a.lods[i][k] == b.lods[i][k]) << name << ": " << x.path << " LOD " << k;
+        ++lods;
+      }
+      EXPECT_EQ(x.bounds, y.bounds);
+    }
+    EXPECT_GT(lods, a.manifest.nodes.size()) << "chains longer than one LOD were compared";
+  }
+}
+
+// --- cracks ---
+
+using Position = std::array<std::uint32_t, 3>;  // exact float bits
+
+struct PositionHash {
+  std::size_t operator()(const Position& p) const {
+    std::uint64_t h = 0x9e3779b97f4a7c15ull;
+    for (std::uint32_t v : p) h = (h ^ v) * 0xff51afd7ed558ccdull;
+    return static_cast<std::size_t>(h ^ (h >> 32));
+  }
+};
+
+// The edges of `meshes`, merged by exact position, that exactly one triangle uses, each as its
+// two positions in ascending order; sorted.
+std::vector<std::pair<Position, Position>> open_edges(const std::vector<const NodeMesh*>& meshes) {
+  std::unordered_map<Position, std::uint32_t, PositionHash> ids;
+  std::vector<Position> positions;
+  std::unordered_map<std::uint64_t, std::uint32_t> uses;
+  for (const NodeMesh* mesh : meshes) {
+    const std::size_t stride = mesh->layout.floats();
+    for (std::size_t t = 0; t < mesh->triangle_count(); ++t) {
+      std::uint32_t corner[3];
+      for (std::size_t c = 0; c < 3; ++c) {
+        const float* v = &mesh->vertices[mesh->indices[3 * t + c] * stride];
+        const Position p{std::bit_cast<std::uint32_t>(v[0]), std::bit_cast<std::uint32_t>(v[1]),
+                         std::bit_cast<std::uint32_t>(v[2])};
+        auto [it, added] = ids.try_emplace(p, static_cast<std::uint32_t>(positions.size()));
+        if (added) positions.push_back(p);
+        corner[c] = it->second;
+      }
+      for (std::size_t e = 0; e < 3; ++e) {
+        const std::uint32_t a = corner[e], b = corner[(e + 1) % 3];
+        ++uses[(std::uint64_t{std::min(a, b)} << 32) | std::max(a, b)];
+      }
+    }
+  }
+  std::vector<std::pair<Position, Position>> open;
+  for (const auto& [key, count] : uses) {
+    if (count != 1) continue;
+    Position a = positions[key >> 32], b = positions[key & 0xffffffffu];
+    if (b < a) std::swap(a, b);
+    open.emplace_back(a, b);
+  }
+  std::sort(open.begin(), open.end());
+  return open;
+}
+
+// A random frontier of the tree: at each node either one of its LODs (always at a leaf) or
+// its children. Returns the chosen meshes; `covered` sums the chosen nodes' source triangles.
+void random_cut(const LoadedTree& t, std::size_t node, std::mt19937_64& rng,
+                std::vector<const NodeMesh*>& cut, std::uint64_t& covered) {
+  const NodeInfo& n = t.manifest.nodes[node];
+  if (!n.lods.empty() && (n.is_leaf() || std::bernoulli_distribution(0.35)(rng))) {
+    const std::size_t lod = std::uniform_int_distribution<std::size_t>(0, n.lods.size() - 1)(rng);
+    cut.push_back(&t.lods[node][lod]);
+    covered += n.source_triangles;
+    return;
+  }
+  for (std::int32_t c : n.children)
+    if (c >= 0) random_cut(t, static_cast<std::size_t>(c), rng, cut, covered);
+}
+
+// The finest cut: every leaf's original triangles, i.e. the input.
+std::vector<const NodeMesh*> leaf_cut(const LoadedTree& t) {
+  std::vector<const NodeMesh*> cut;
+  for (std::size_t i = 0; i < t.manifest.nodes.size(); ++i)
+    if (t.manifest.nodes[i].is_leaf()) cut.push_back(&t.lods[i][0]);
+  return cut;
+}
+
+void expect_random_cuts_add_no_open_edge(const LoadedTree& t, bool input_closed) {
+  const auto input_open = open_edges(leaf_cut(t));
+  if (input_closed) {
+    EXPECT_EQ(input_open.size(), 0u) << "the input is not closed";
+  }
+  std::mt19937_64 rng(2026);
+  std::size_t coarser_than_leaves = 0;
+  for (int i = 0; i < 100; ++i) {
+    std::vector<const NodeMesh*> cut;
+    std::uint64_t covered = 0;
+    random_cut(t, 0, rng, cut, covered);
+    ASSERT_EQ(covered, t.manifest.input_triangles) << "cut " << i << " does not cover the model";
+    std::size_t triangles = 0;
+    for (const NodeMesh* mesh : cut) triangles += mesh->triangle_count();
+    coarser_than_leaves += triangles < t.manifest.input_triangles;
+    const auto open = open_edges(cut);
+    EXPECT_EQ(open.size(), input_open.size()) << "cut " << i << " (" << cut.size() << " LODs)";
+    EXPECT_TRUE(open == input_open) << "cut " << i << " opened or closed edges";
+    if (open != input_open) break;
+  }
+  EXPECT_GT(coarser_than_leaves, 90u) << "the cuts should mostly be simplified";
+}
+
+TEST_F(LodTreeTest, RandomCutsOfAClosedRockHaveNoOpenEdge) {
+  const LoadedTree t = bake_and_load(options(rock_ply(), "rock-cuts"));
+  expect_random_cuts_add_no_open_edge(t, true);
+}
+
+TEST_F(LodTreeTest, RandomCutsOfACityAddNoOpenEdge) {
+  // The city's boxes are closed; its ground quad's outline is the only open boundary.
+  const LoadedTree t = bake_and_load(options(city_ply(), "city-cuts"));
+  expect_random_cuts_add_no_open_edge(t, false);
+}
+
+TEST_F(LodTreeTest, RandomCutsOfABade2006RockHaveNoOpenEdge) {
+  BakeOptions o = options(rock_ply(), "rock-cuts-bade");
+  o.method = ClusterMethod::bade2006;
+  const LoadedTree t = bake_and_load(o);
+  expect_random_cuts_add_no_open_edge(t, true);
+}
+
+// --- error bounds ---
+
+// Points of a mesh's surface: its vertices and four interior points per triangle.
+void surface_samples(const NodeMesh& mesh, std::vector<glm::vec3>& out) {
+  const std::size_t stride = mesh.layout.floats();
+  auto at = [&](std::uint32_t v) {
+    const float* f = &mesh.vertices[v * stride];
+    return glm::vec3(f[0], f[1], f[2]);
+  };
+  for (std::size_t v = 0; v < mesh.vertex_count(); ++v) out.push_back(at(static_cast<std::uint32_t>(v)));
+  for (std::size_t t = 0; t < mesh.triangle_count(); ++t) {
+    const glm::vec3 a = at(mesh.indices[3 * t]), b = at(mesh.indices[3 * t + 1]),
+                    c = at(mesh.indices[3 * t + 2]);
+    out.push_back((a + b + c) / 3.0f);
+    out.push_back(a * (2.0f / 3) + b * (1.0f / 6) + c * (1.0f / 6));
+    out.push_back(a * (1.0f / 6) + b * (2.0f / 3) + c * (1.0f / 6));
+    out.push_back(a * (1.0f / 6) + b * (1.0f / 6) + c * (2.0f / 3));
+  }
+}
+
+TEST_F(LodTreeTest, StoredErrorsBoundTheDistanceFromTheOriginalTriangles) {
+  BakeOptions o = options(big_rock_ply(), "bounds");
+  o.max_tris = static_cast<std::uint32_t>(2000 / kScale);
+  const LoadedTree t = bake_and_load(o);
+  const Manifest& m = t.manifest;
+  ASSERT_FALSE(m.nodes.empty());
+
+  // Samples of each node's region, the original triangles of its leaves: children follow their
+  // parents, so a backward sweep appends every node's samples to its parent's.
+  std::vector<std::vector<glm::vec3>> samples(m.nodes.size());
+  for (std::size_t i = m.nodes.size(); i-- > 0;) {
+    if (m.nodes[i].is_leaf()) surface_samples(t.lods[i][0], samples[i]);
+    if (m.nodes[i].parent >= 0) {
+      auto& parent = samples[static_cast<std::size_t>(m.nodes[i].parent)];
+      parent.insert(parent.end(), samples[i].begin(), samples[i].end());
+    }
+  }
+
+  const double diagonal = std::sqrt(
+      std::pow(m.bounds.max[0] - m.bounds.min[0], 2.0) + std::pow(m.bounds.max[1] - m.bounds.min[1], 2.0) +
+      std::pow(m.bounds.max[2] - m.bounds.min[2], 2.0));
+  std::size_t checked = 0, simplified = 0;
+  double tightest = 0;  // largest measured / stored ratio
+  for (std::size_t i = 0; i < m.nodes.size(); ++i) {
+    for (std::size_t k = 0; k < m.nodes[i].lods.size(); ++k) {
+      const NodeMesh& lod = t.lods[i][k];
+      const double stored = m.nodes[i].lods[k].error;
+      ASSERT_TRUE(std::isfinite(stored));
+      const measure::TriangleBvh bvh(lod.vertices, lod.layout.floats(), lod.indices);
+      // float distances: allow their rounding, a few ulps of the model's size
+      const double slack = diagonal * 1e-6;
+      double measured = 0;
+      std::size_t violations = 0;
+      for (const glm::vec3& p : samples[i]) {
+        const auto hit = bvh.closest(p, static_cast<float>(stored + slack));
+        if (hit.found()) {
+          measured = std::max(measured, static_cast<double>(hit.distance));
+        } else {
+          ++violations;
+          measured = std::max(measured, static_cast<double>(bvh.closest(p).distance));
+        }
+      }
+      EXPECT_EQ(violations, 0u) << "node '" << m.nodes[i].path << "' LOD " << k << ": measured "
+                                << measured << " > stored " << stored;
+      ++checked;
+      if (stored > 0) {
+        ++simplified;
+        tightest = std::max(tightest, measured / stored);
+      }
+    }
+  }
+  EXPECT_GT(simplified, m.nodes.size() / 2);
+  // Not vacuous: some bound is within 5x of what is measured, and even the root's coarsest
+  // (a few hundred triangles, errors accumulated over every level) bounds less than half the
+  // model's size.
+  EXPECT_GT(tightest, 0.2);
+  EXPECT_LT(m.nodes[0].lods.back().error, 0.5 * diagonal);
+  std::printf("[ info ] %zu node LODs checked, max measured/stored error %.3f, root coarsest "
+              "%u triangles error %.4g (diagonal %.4g)\n",
+              checked, tightest, m.nodes[0].lods.back().triangles, m.nodes[0].lods.back().error,
+              diagonal);
+}
+
+}  // namespace
+}  // namespace octolod::bake
