@@ -8,12 +8,12 @@ octree stream with the node work overlapping, the LOD work left after the stream
 summed over threads), triangles/s and peak RSS (from the kernel, after the process ended: the
 manifest writing is included; also minus the RSS of an idle `octolod --help`, the CLI's fixed
 footprint of shared libraries), for the full bake and for `--method none` (soup + octree +
-leaf files only), then the seed's Table 5.1: leaves and full build time against max-tris
-1000..6000 at depths 5 and 8.
+leaf files only), then the seed's Table 5.1: leaves and build time against max-tris 1000..6000 at
+depths 5 and 8 (octree only by default, --table-method grid for the full bake).
 
   bench/bake_bench.py --cli build/cli/octolod [--work /tmp/bake-bench] [--sizes 1M,10M]
                       [--memory 16M,64M,256M] [--threads 2] [--methods grid,none]
-                      [--table-size 1M] [--no-table] [--markdown]
+                      [--table-size 1M] [--table-method none] [--no-table] [--markdown]
 --markdown prints the tables as Markdown (for docs/benchmarks.md).
 """
 import argparse
@@ -68,6 +68,8 @@ def main():
     ap.add_argument("--threads", type=int, default=2)
     ap.add_argument("--methods", default="grid,none")
     ap.add_argument("--table-size", default="1M")
+    ap.add_argument("--table-method", default="none",
+                    help="--method of the Table 5.1 bakes (none: the octree build the seed times)")
     ap.add_argument("--no-table", action="store_true")
     ap.add_argument("--markdown", action="store_true")
     args = ap.parse_args()
@@ -127,7 +129,8 @@ def main():
     for max_tris in range(1000, 7000, 1000):
         cells = {}
         for depth in (5, 8):
-            r = run_bake(args.cli, ply, out, work_tmp, "64M", args.threads, max_tris, depth)
+            r = run_bake(args.cli, ply, out, work_tmp, "64M", args.threads, max_tris, depth,
+                         args.table_method)
             cells[depth] = r
         row([max_tris, cells[5]["leaves"], cells[8]["leaves"],
              "%.2f" % cells[5]["stage_seconds"]["total"],

@@ -335,7 +335,7 @@ class LodTreeBuilder::Impl {
     const Slot& s = slots_[static_cast<std::size_t>(node)];
     const std::int32_t parent = s.parent;
     const std::uint32_t octant = s.octant;
-    const bool has_lod = !done.lods.lods.empty();
+    const bool has_lod = options_.build_lods && !done.lods.lods.empty();
     const std::string first_file = has_lod ? done.lods.lods[done.first_index].file : "";
     results_[static_cast<std::size_t>(node)] = std::move(done.lods);
     if (parent < 0) return;
