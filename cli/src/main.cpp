@@ -53,6 +53,10 @@ int main(int argc, char** argv) {
   add_export_command(app, context);
   add_bake_command(app, context);
   add_info_command(app, context);
+  add_extract_command(app, context);
+  add_eval_command(app, context);
+  add_reference_command(app, context);
+  add_compare_command(app, context);
   add_render_command(app, context);
 
 
