@@ -31,8 +31,10 @@ struct ReferenceStats {
 //   position) are dropped.
 // - The decimation stops at the target or earlier when no legal collapse is left (boundaries,
 //   normal flips), so the result can stay above the target; on closed manifold meshes it lands
-//   within one or two triangles of it. A target >= the welded triangle count returns the welded
-//   mesh unsimplified.
+//   within one or two triangles of it. Edge collapses never remove a connected component: a
+//   closed component stops as a tetrahedron (4 triangles), so a mesh of many small closed parts
+//   (the sample city's boxes) cannot go below 4 triangles per part. A target >= the welded
+//   triangle count returns the welded mesh unsimplified.
 // - Attributes (the output has the input's layout): each output vertex takes the input's
 //   attributes interpolated barycentrically at the closest point of the input surface
 //   (TriangleBvh) — correct for positions that moved off the input, and it never mixes values
