@@ -46,7 +46,9 @@ struct Slot {
   std::uint32_t children = 0;
   std::uint32_t done = 0;    // children whose chains are complete
   std::uint64_t child_triangles = 0;
-  std::array<ChildLod, 8> child;
+  // Children's LODs by octant, allocated by the first delivery and taken by the node's task:
+  // only pending parents hold any (a tree of 10M triangles has ~15K nodes).
+  std::unique_ptr<std::array<ChildLod, 8>> child;
 };
 
 struct Task {
@@ -217,8 +219,11 @@ class LodTreeBuilder::Impl {
     const Slot& slot = slots_[static_cast<std::size_t>(task.node)];
     const std::string dir = slot.dir;
     const Bounds cell = slot.cell;
+    std::unique_ptr<std::array<ChildLod, 8>> taken =
+        std::move(slots_[static_cast<std::size_t>(task.node)].child);
     std::array<ChildLod, 8> children;
-    if (!task.leaf) children = std::move(slots_[static_cast<std::size_t>(task.node)].child);
+    if (taken) children = std::move(*taken);
+    taken.reset();
     lock.unlock();
 
     const std::size_t record_bytes = task.records.size();
@@ -342,7 +347,8 @@ class LodTreeBuilder::Impl {
     Slot& p = slots_[static_cast<std::size_t>(parent)];
     ++p.done;
     if (has_lod) {
-      ChildLod& c = p.child[octant];
+      if (!p.child) p.child = std::make_unique<std::array<ChildLod, 8>>();
+      ChildLod& c = (*p.child)[octant];
       c.present = true;
       c.error = done.first_error;
       c.file = first_file;
