@@ -94,12 +94,16 @@ Result<std::vector<runtime::Camera>> camera_path(const std::string& kind, const 
     const glm::vec3 dir = glm::normalize(glm::vec3(0.6f, 0.35f, 1.0f));
     for (std::uint32_t i = 0; i < frames; ++i)
       per_frame.push_back({c + dir * (12.0f * r * std::pow(0.05f, t_of(i))), c});
-  } else if (kind == "flythrough") {  // a straight pass through the model, looking ahead
-    const glm::vec3 from = c + r * glm::vec3(-1.6f, 0.15f, -1.2f);
-    const glm::vec3 to = c + r * glm::vec3(1.6f, 0.05f, 1.2f);
+  } else if (kind == "flythrough") {
+    // A straight low pass that skims the model (closest approach 0.9 r from the centre, so it
+    // grazes the surface), looking partly ahead and partly at the model: the view sweeps from a
+    // distant overview over close-ups to looking back, and the model never leaves the picture.
+    const glm::vec3 along = glm::normalize(glm::vec3(0.8f, 0.0f, 0.6f));
+    const glm::vec3 side = c + r * glm::vec3(-0.54f, 0.2f, 0.72f);
+    const glm::vec3 from = side - 2.4f * r * along, to = side + 2.4f * r * along;
     for (std::uint32_t i = 0; i < frames; ++i) {
       const glm::vec3 eye = from + (to - from) * t_of(i);
-      per_frame.push_back({eye, eye + (to - from)});
+      per_frame.push_back({eye, 0.4f * (eye + r * along) + 0.6f * c});
     }
   } else {
     Result<std::vector<Key>> read = read_keyframes(kind);
