@@ -69,8 +69,9 @@ std::uint64_t add_triangles(const NodeMesh& input, const std::vector<OmMesh::Ver
                          c = handle[input.indices[3 * t + 2]];
     if (a == b || b == c || c == a) continue;  // degenerate after welding
     if (mesh.add_face(a, b, c).is_valid()) continue;
-    OmMesh::VertexHandle a2 = mesh.add_vertex(mesh.point(a)), b2 = mesh.add_vertex(mesh.point(b)),
-                         c2 = mesh.add_vertex(mesh.point(c));
+    // copies: point() refers into the vertex array, which add_vertex may reallocate
+    const OmMesh::Point pa = mesh.point(a), pb = mesh.point(b), pc = mesh.point(c);
+    OmMesh::VertexHandle a2 = mesh.add_vertex(pa), b2 = mesh.add_vertex(pb), c2 = mesh.add_vertex(pc);
     mesh.add_face(a2, b2, c2);
     ++detached;
   }
