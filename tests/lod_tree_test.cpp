@@ -200,7 +200,10 @@ TEST_F(LodTreeTest, OneAndTwoThreadsWriteIdenticalLodTreesWithEitherMethod) {
       }
       EXPECT_EQ(x.bounds, y.bounds);
     }
-    EXPECT_GT(lods, a.manifest.nodes.size()) << "chains longer than one LOD were compared";
+    // (bade2006's fan rarely halves a small node: its chains may be one LOD long)
+    if (method == ClusterMethod::grid) {
+      EXPECT_GT(lods, a.manifest.nodes.size()) << "chains longer than one LOD were compared";
+    }
   }
 }
 
