@@ -1,12 +1,19 @@
 // Offscreen OpenGL rendering through OSMesa with the compatibility profile's fixed-function
 // pipeline: one light at the eye, per-vertex normals when the mesh has them, else flat normals.
+//
+// libOSMesa is opened with dlopen on the first render, not linked: it pulls in LLVM, whose
+// relocations alone cost ~50 MiB of resident memory at program start — every `octolod` command
+// (a bake under a 16 MiB budget, a reader refusing a bad PLY) would pay for it.
 #include "offscreen_renderer.h"
+
+#include <dlfcn.h>
 
 #include <GL/osmesa.h>
 #include <GL/gl.h>
 
 #include <array>
 #include <memory>
+#include <string>
 #include <vector>
 
 #include <glm/gtc/type_ptr.hpp>
@@ -14,9 +21,74 @@
 namespace octolod::cli {
 namespace {
 
-struct ContextDeleter {
-  void operator()(osmesa_context* context) const { OSMesaDestroyContext(context); }
+// The entry points render_offscreen uses, resolved from libOSMesa (which exports the GL 1.x
+// functions too). The library stays loaded for the life of the process.
+struct OsMesa {
+  decltype(&::OSMesaCreateContextExt) CreateContextExt = nullptr;
+  decltype(&::OSMesaMakeCurrent) MakeCurrent = nullptr;
+  decltype(&::OSMesaDestroyContext) DestroyContext = nullptr;
+  decltype(&::glViewport) Viewport = nullptr;
+  decltype(&::glClearColor) ClearColor = nullptr;
+  decltype(&::glClear) Clear = nullptr;
+  decltype(&::glEnable) Enable = nullptr;
+  decltype(&::glMatrixMode) MatrixMode = nullptr;
+  decltype(&::glLoadMatrixf) LoadMatrixf = nullptr;
+  decltype(&::glLoadIdentity) LoadIdentity = nullptr;
+  decltype(&::glLightfv) Lightfv = nullptr;
+  decltype(&::glLightModelfv) LightModelfv = nullptr;
+  decltype(&::glLightModeli) LightModeli = nullptr;
+  decltype(&::glColorMaterial) ColorMaterial = nullptr;
+  decltype(&::glEnableClientState) EnableClientState = nullptr;
+  decltype(&::glVertexPointer) VertexPointer = nullptr;
+  decltype(&::glNormalPointer) NormalPointer = nullptr;
+  decltype(&::glColorPointer) ColorPointer = nullptr;
+  decltype(&::glDrawArrays) DrawArrays = nullptr;
+  decltype(&::glFinish) Finish = nullptr;
+  std::string error;  // non-empty when the library or a symbol is missing
 };
+
+template <typename Fn>
+void resolve(void* library, const char* name, Fn& fn, std::string& error) {
+  fn = reinterpret_cast<Fn>(dlsym(library, name));
+  if (!fn && error.empty()) error = std::string("libOSMesa has no ") + name;
+}
+
+OsMesa load_osmesa() {
+  OsMesa api;
+  void* library = dlopen("libOSMesa.so.8", RTLD_NOW | RTLD_LOCAL);
+  if (!library) library = dlopen("libOSMesa.so", RTLD_NOW | RTLD_LOCAL);
+  if (!library) {
+    api.error = std::string("cannot load libOSMesa (install libosmesa6): ") + dlerror();
+    return api;
+  }
+  std::string& e = api.error;
+  resolve(library, "OSMesaCreateContextExt", api.CreateContextExt, e);
+  resolve(library, "OSMesaMakeCurrent", api.MakeCurrent, e);
+  resolve(library, "OSMesaDestroyContext", api.DestroyContext, e);
+  resolve(library, "glViewport", api.Viewport, e);
+  resolve(library, "glClearColor", api.ClearColor, e);
+  resolve(library, "glClear", api.Clear, e);
+  resolve(library, "glEnable", api.Enable, e);
+  resolve(library, "glMatrixMode", api.MatrixMode, e);
+  resolve(library, "glLoadMatrixf", api.LoadMatrixf, e);
+  resolve(library, "glLoadIdentity", api.LoadIdentity, e);
+  resolve(library, "glLightfv", api.Lightfv, e);
+  resolve(library, "glLightModelfv", api.LightModelfv, e);
+  resolve(library, "glLightModeli", api.LightModeli, e);
+  resolve(library, "glColorMaterial", api.ColorMaterial, e);
+  resolve(library, "glEnableClientState", api.EnableClientState, e);
+  resolve(library, "glVertexPointer", api.VertexPointer, e);
+  resolve(library, "glNormalPointer", api.NormalPointer, e);
+  resolve(library, "glColorPointer", api.ColorPointer, e);
+  resolve(library, "glDrawArrays", api.DrawArrays, e);
+  resolve(library, "glFinish", api.Finish, e);
+  return api;
+}
+
+const OsMesa& osmesa() {
+  static const OsMesa api = load_osmesa();
+  return api;
+}
 
 // Expands an indexed NodeMesh into flat arrays of position, normal and colour per corner, so
 // meshes without normals still shade (face normals) and colours can be tinted per node.
@@ -62,48 +134,51 @@ glm::vec3 lod_tint(std::size_t level) {
 }
 
 Result<Image> render_offscreen(std::span<const RenderItem> items, const RenderView& view) {
-  std::unique_ptr<osmesa_context, ContextDeleter> context(
-      OSMesaCreateContextExt(OSMESA_RGBA, 24, 0, 0, nullptr));
+  const OsMesa& gl = osmesa();
+  if (!gl.error.empty()) return unsupported_error("render: " + gl.error);
+  auto destroy = [&gl](osmesa_context* c) { gl.DestroyContext(c); };
+  std::unique_ptr<osmesa_context, decltype(destroy)> context(
+      gl.CreateContextExt(OSMESA_RGBA, 24, 0, 0, nullptr), destroy);
   if (!context) return unsupported_error("render: cannot create an OSMesa OpenGL context");
   std::vector<std::uint8_t> pixels(static_cast<std::size_t>(view.width) *
                                    static_cast<std::size_t>(view.height) * 4);
-  if (!OSMesaMakeCurrent(context.get(), pixels.data(), GL_UNSIGNED_BYTE, view.width, view.height))
+  if (!gl.MakeCurrent(context.get(), pixels.data(), GL_UNSIGNED_BYTE, view.width, view.height))
     return unsupported_error("render: cannot make the OSMesa context current");
 
   auto channel = [](std::uint32_t rgb, int shift) {
     return static_cast<float>((rgb >> shift) & 0xFFu) / 255.0f;
   };
-  glViewport(0, 0, view.width, view.height);
-  glClearColor(channel(view.background, 16), channel(view.background, 8), channel(view.background, 0), 1);
-  glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
-  glEnable(GL_DEPTH_TEST);
-  glMatrixMode(GL_PROJECTION);
-  glLoadMatrixf(glm::value_ptr(view.projection));
-  glMatrixMode(GL_MODELVIEW);
-  glLoadIdentity();
+  gl.Viewport(0, 0, view.width, view.height);
+  gl.ClearColor(channel(view.background, 16), channel(view.background, 8), channel(view.background, 0), 1);
+  gl.Clear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+  gl.Enable(GL_DEPTH_TEST);
+  gl.MatrixMode(GL_PROJECTION);
+  gl.LoadMatrixf(glm::value_ptr(view.projection));
+  gl.MatrixMode(GL_MODELVIEW);
+  gl.LoadIdentity();
   // Headlight: set while the modelview is identity, so it stays at the eye.
   const float light_dir[4] = {0.3f, 0.5f, 1.0f, 0.0f};
   const float ambient[4] = {0.25f, 0.25f, 0.25f, 1.0f};
-  glLightfv(GL_LIGHT0, GL_POSITION, light_dir);
-  glLightModelfv(GL_LIGHT_MODEL_AMBIENT, ambient);
-  glLightModeli(GL_LIGHT_MODEL_TWO_SIDE, GL_TRUE);
-  glEnable(GL_LIGHTING);
-  glEnable(GL_LIGHT0);
-  glEnable(GL_NORMALIZE);
-  glEnable(GL_COLOR_MATERIAL);
-  glColorMaterial(GL_FRONT_AND_BACK, GL_AMBIENT_AND_DIFFUSE);
-  glLoadMatrixf(glm::value_ptr(view.view));
-  glEnableClientState(GL_VERTEX_ARRAY);
-  glEnableClientState(GL_NORMAL_ARRAY);
-  glEnableClientState(GL_COLOR_ARRAY);
+  gl.Lightfv(GL_LIGHT0, GL_POSITION, light_dir);
+  gl.LightModelfv(GL_LIGHT_MODEL_AMBIENT, ambient);
+  gl.LightModeli(GL_LIGHT_MODEL_TWO_SIDE, GL_TRUE);
+  gl.Enable(GL_LIGHTING);
+  gl.Enable(GL_LIGHT0);
+  gl.Enable(GL_NORMALIZE);
+  gl.Enable(GL_COLOR_MATERIAL);
+  gl.ColorMaterial(GL_FRONT_AND_BACK, GL_AMBIENT_AND_DIFFUSE);
+  gl.LoadMatrixf(glm::value_ptr(view.view));
+  gl.EnableClientState(GL_VERTEX_ARRAY);
+  gl.EnableClientState(GL_NORMAL_ARRAY);
+  gl.EnableClientState(GL_COLOR_ARRAY);
   for (const RenderItem& item : items) {
     DrawArrays arrays = expand(*item.mesh, item.tint);
-    glVertexPointer(3, GL_FLOAT, 0, arrays.positions.data());
-    glNormalPointer(GL_FLOAT, 0, arrays.normals.data());
-    glColorPointer(3, GL_FLOAT, 0, arrays.colors.data());
-    glDrawArrays(GL_TRIANGLES, 0, static_cast<GLsizei>(arrays.positions.size() / 3));
+    gl.VertexPointer(3, GL_FLOAT, 0, arrays.positions.data());
+    gl.NormalPointer(GL_FLOAT, 0, arrays.normals.data());
+    gl.ColorPointer(3, GL_FLOAT, 0, arrays.colors.data());
+    gl.DrawArrays(GL_TRIANGLES, 0, static_cast<GLsizei>(arrays.positions.size() / 3));
   }
-  glFinish();
+  gl.Finish();
 
   // OpenGL's first row is the bottom one; Image's is the top one.
   Image image;
