@@ -43,17 +43,9 @@ NodeMesh make_sample(samplegen::Shape shape, std::uint64_t triangles) {
   samplegen::SampleSpec spec;
   spec.shape = shape;
   spec.triangles = triangles;
-  auto stream = samplegen::SampleStream::create(spec);
-  if (!stream.ok()) fail(stream.status().message());
-  NodeMesh mesh;
-  mesh.layout = spec.layout;
-  for (;;) {
-    const samplegen::SampleBatch batch = stream.value()->next();
-    if (batch.kind == samplegen::SampleBatch::Kind::end) break;
-    mesh.vertices.insert(mesh.vertices.end(), batch.vertices.begin(), batch.vertices.end());
-    mesh.indices.insert(mesh.indices.end(), batch.triangles.begin(), batch.triangles.end());
-  }
-  return mesh;
+  Result<NodeMesh> mesh = samplegen::generate_sample_mesh(spec);
+  if (!mesh.ok()) fail(mesh.status().message());
+  return std::move(mesh.value());
 }
 
 // The triangles whose centroid has x < split (vertices compacted), and its cell.

@@ -26,20 +26,12 @@ octolod::NodeMesh make_rock(std::uint64_t triangles, std::uint64_t seed) {
   spec.shape = octolod::samplegen::Shape::rock;
   spec.triangles = triangles;
   spec.seed = seed;
-  auto stream = octolod::samplegen::SampleStream::create(spec);
-  if (!stream.ok()) {
-    std::fprintf(stderr, "error: %s\n", stream.status().message().c_str());
+  octolod::Result<octolod::NodeMesh> mesh = octolod::samplegen::generate_sample_mesh(spec);
+  if (!mesh.ok()) {
+    std::fprintf(stderr, "error: %s\n", mesh.status().message().c_str());
     std::exit(1);
   }
-  octolod::NodeMesh mesh;
-  mesh.layout = spec.layout;
-  for (;;) {
-    octolod::samplegen::SampleBatch batch = stream.value()->next();
-    if (batch.kind == octolod::samplegen::SampleBatch::Kind::end) break;
-    mesh.vertices.insert(mesh.vertices.end(), batch.vertices.begin(), batch.vertices.end());
-    mesh.indices.insert(mesh.indices.end(), batch.triangles.begin(), batch.triangles.end());
-  }
-  return mesh;
+  return std::move(mesh.value());
 }
 
 // Points near the surface: random triangles' centroids pushed off by up to `offset` model units

@@ -33,17 +33,9 @@ NodeMesh make_sample(samplegen::Shape shape, std::uint64_t triangles, VertexLayo
   spec.shape = shape;
   spec.triangles = triangles;
   spec.layout = layout;
-  auto stream = samplegen::SampleStream::create(spec);
-  EXPECT_TRUE(stream.ok());
-  NodeMesh mesh;
-  mesh.layout = layout;
-  for (;;) {
-    const samplegen::SampleBatch batch = stream.value()->next();
-    if (batch.kind == samplegen::SampleBatch::Kind::end) break;
-    mesh.vertices.insert(mesh.vertices.end(), batch.vertices.begin(), batch.vertices.end());
-    mesh.indices.insert(mesh.indices.end(), batch.triangles.begin(), batch.triangles.end());
-  }
-  return mesh;
+  Result<NodeMesh> mesh = samplegen::generate_sample_mesh(spec);
+  EXPECT_TRUE(mesh.ok()) << mesh.status().message();
+  return mesh.ok() ? std::move(mesh.value()) : NodeMesh{};
 }
 
 // A node: some triangles of a mesh (vertices compacted) and its octree cell.

@@ -421,17 +421,9 @@ NodeMesh rock_mesh(std::uint64_t triangles) {
   samplegen::SampleSpec spec;
   spec.shape = samplegen::Shape::rock;
   spec.triangles = triangles;
-  auto stream = samplegen::SampleStream::create(spec);
-  EXPECT_TRUE(stream.ok());
-  NodeMesh mesh;
-  mesh.layout = spec.layout;
-  for (;;) {
-    samplegen::SampleBatch batch = stream.value()->next();
-    if (batch.kind == samplegen::SampleBatch::Kind::end) break;
-    mesh.vertices.insert(mesh.vertices.end(), batch.vertices.begin(), batch.vertices.end());
-    mesh.indices.insert(mesh.indices.end(), batch.triangles.begin(), batch.triangles.end());
-  }
-  return mesh;
+  Result<NodeMesh> mesh = samplegen::generate_sample_mesh(spec);
+  EXPECT_TRUE(mesh.ok()) << mesh.status().message();
+  return mesh.ok() ? std::move(mesh.value()) : NodeMesh{};
 }
 
 TEST(Reference, ClosedRockReachesEveryTargetAndStaysClosed) {

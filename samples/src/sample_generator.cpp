@@ -314,4 +314,17 @@ Result<VertexLayout> parse_attributes(std::string_view text) {
   return layout;
 }
 
+Result<NodeMesh> generate_sample_mesh(const SampleSpec& spec) {
+  Result<std::unique_ptr<SampleStream>> stream = SampleStream::create(spec);
+  if (!stream.ok()) return stream.status();
+  NodeMesh mesh;
+  mesh.layout = spec.layout;
+  for (SampleBatch batch = stream.value()->next(); batch.kind != SampleBatch::Kind::end;
+       batch = stream.value()->next()) {
+    mesh.vertices.insert(mesh.vertices.end(), batch.vertices.begin(), batch.vertices.end());
+    mesh.indices.insert(mesh.indices.end(), batch.triangles.begin(), batch.triangles.end());
+  }
+  return mesh;
+}
+
 }  // namespace octolod::samplegen

@@ -21,6 +21,7 @@
 #include <string>
 #include <string_view>
 
+#include "octolod/formats/node_file.h"
 #include "octolod/formats/ply.h"
 #include "octolod/formats/status.h"
 #include "octolod/formats/vertex_layout.h"
@@ -121,6 +122,12 @@ Status write_sample_ply(const SampleSpec& spec, const std::filesystem::path& pat
                         PlyFormat format = PlyFormat::binary_little_endian,
                         const SampleProgress& progress = {},
                         const SampleStreamOptions& stream_options = {});
+
+// The whole sample as one indexed mesh in memory (spec.layout; colours as floats 0..1, the
+// stream's values): for tests and benchmarks of algorithms that take a NodeMesh. Memory is the
+// full mesh (about (floats per vertex x 4) x triangles / 2 + 12 x triangles bytes), so keep
+// spec.triangles to what fits. Errors as SampleStream::create.
+Result<NodeMesh> generate_sample_mesh(const SampleSpec& spec);
 
 // Command-line vocabulary, shared by `octolod sample` and the benchmarks. All return usage
 // errors that quote the text.
