@@ -2,11 +2,9 @@
 // one octree depth) as a glTF/GLB file with one mesh per node LOD, optionally Draco-compressed —
 // for viewing a bake in any glTF viewer or handing a fixed LOD to an engine.
 #include <chrono>
-#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <memory>
-#include <optional>
 #include <string>
 #include <system_error>
 #include <vector>
@@ -14,6 +12,7 @@
 #include "command.h"
 #include "octolod/formats/gltf.h"
 #include "octolod/formats/manifest.h"
+#include "cut_choice.h"
 #include "tree_cut.h"
 
 namespace octolod::cli {
@@ -21,8 +20,7 @@ namespace {
 
 struct ExportArgs {
   std::string tree;
-  std::optional<double> error;
-  std::optional<std::uint32_t> level;
+  CutChoice cut;
   std::string output;
   bool draco = false;
   DracoOptions draco_options;
@@ -34,15 +32,12 @@ std::string mesh_name(const NodeInfo& node, std::uint32_t lod) {
 }
 
 int run_export(const ExportArgs& args, const CommandContext& context) {
-  if (args.error && !(*args.error >= 0 && std::isfinite(*args.error)))
-    return report(usage_error("--error must be a finite distance >= 0 (model units)"));
   const auto start = std::chrono::steady_clock::now();
   const std::filesystem::path root = args.tree;
   Result<Manifest> manifest = read_manifest(root / std::string(kManifestFileName));
   if (!manifest.ok()) return report(manifest.status());
 
-  const std::vector<CutEntry> cut = args.error ? uniform_error_cut(manifest.value(), *args.error)
-                                               : depth_cut(manifest.value(), *args.level);
+  const std::vector<CutEntry> cut = select_cut(manifest.value(), args.cut);
   Result<std::vector<NodeMesh>> meshes = load_cut(root, manifest.value(), cut);
   if (!meshes.ok()) return report(meshes.status());
 
@@ -91,12 +86,7 @@ void add_export_command(CLI::App& app, CommandContext& context) {
   CLI::App* command = app.add_subcommand(
       "export", "Write a uniform cut of a baked tree as glTF/GLB, one mesh per node LOD");
   command->add_option("tree", args->tree, "Baked tree directory (holds manifest.json)")->required();
-  CLI::Option* error =
-      command->add_option("--error", args->error,
-                          "Per node, the coarsest LOD whose stored error is <= E (model units)");
-  CLI::Option* level = command->add_option(
-      "--level", args->level, "The nodes at octree depth K (and leaves above it), finest LOD each");
-  error->excludes(level);
+  add_cut_options(*command, args->cut);
   command->add_option("-o,--output", args->output, "Output file: .glb, or .gltf for embedded JSON")
       ->required();
   CLI::Option* draco = command->add_flag(
@@ -107,9 +97,9 @@ void add_export_command(CLI::App& app, CommandContext& context) {
                    "Draco position quantization bits (1..30) over the cut's bounding cube")
       ->capture_default_str()
       ->needs(draco);
-  command->callback([args, error, level, &context] {
-    if (error->count() + level->count() != 1) {
-      context.exit_code = report(usage_error("export: give exactly one of --error E or --level K"));
+  command->callback([args, &context] {
+    if (const Status choice = check_cut_choice(args->cut, "export"); !choice.ok()) {
+      context.exit_code = report(choice);
       return;
     }
     context.exit_code = run_export(*args, context);

@@ -6,11 +6,9 @@
 // Exit codes: 1 usage, 2 a malformed manifest or node file, 4 a file cannot be read or the
 // output written (nothing is left behind then).
 #include <chrono>
-#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <memory>
-#include <optional>
 #include <string>
 #include <system_error>
 #include <vector>
@@ -19,6 +17,7 @@
 #include "mesh_file.h"
 #include "octolod/formats/manifest.h"
 #include "progress.h"
+#include "cut_choice.h"
 #include "tree_cut.h"
 
 namespace octolod::cli {
@@ -26,22 +25,18 @@ namespace {
 
 struct ExtractArgs {
   std::string tree;
-  std::optional<double> error;
-  std::optional<std::uint32_t> level;
+  CutChoice cut;
   std::string output;
   bool ascii = false;
 };
 
 int run_extract(const ExtractArgs& args, const CommandContext& context) {
-  if (args.error && !(*args.error >= 0 && std::isfinite(*args.error)))
-    return report(usage_error("--error must be a finite distance >= 0 (model units)"));
   const auto start = std::chrono::steady_clock::now();
   const std::filesystem::path root = args.tree;
   Result<Manifest> manifest = read_manifest(root / std::string(kManifestFileName));
   if (!manifest.ok()) return report(manifest.status());
 
-  const std::vector<CutEntry> cut = args.error ? uniform_error_cut(manifest.value(), *args.error)
-                                               : depth_cut(manifest.value(), *args.level);
+  const std::vector<CutEntry> cut = select_cut(manifest.value(), args.cut);
   if (cut.empty())
     return report(bad_input_error(args.tree + ": the tree has no node LODs (an empty mesh was baked)"));
   Progress progress(context);
@@ -94,18 +89,13 @@ void add_extract_command(CLI::App& app, CommandContext& context) {
   CLI::App* command = app.add_subcommand(
       "extract", "Write the mesh of a uniform cut of a baked tree as one welded PLY");
   command->add_option("tree", args->tree, "Baked tree directory (holds manifest.json)")->required();
-  CLI::Option* error =
-      command->add_option("--error", args->error,
-                          "Per node, the coarsest LOD whose stored error is <= E (model units)");
-  CLI::Option* level = command->add_option(
-      "--level", args->level, "The nodes at octree depth K (and leaves above it), finest LOD each");
-  error->excludes(level);
+  add_cut_options(*command, args->cut);
   command->add_option("-o,--output", args->output, "Output .ply file (written atomically)")
       ->required();
   command->add_flag("--ascii", args->ascii, "Write ascii PLY (default: binary little-endian)");
-  command->callback([args, error, level, &context] {
-    if (error->count() + level->count() != 1) {
-      context.exit_code = report(usage_error("extract: give exactly one of --error E or --level K"));
+  command->callback([args, &context] {
+    if (const Status choice = check_cut_choice(args->cut, "extract"); !choice.ok()) {
+      context.exit_code = report(choice);
       return;
     }
     context.exit_code = run_extract(*args, context);

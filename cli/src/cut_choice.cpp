@@ -1,0 +1,31 @@
+// The `--error E | --level K` choice of a uniform cut (cut_choice.h).
+#include "cut_choice.h"
+
+#include <cmath>
+#include <string>
+
+namespace octolod::cli {
+
+void add_cut_options(CLI::App& command, CutChoice& choice) {
+  CLI::Option* error =
+      command.add_option("--error", choice.error,
+                         "Per node, the coarsest LOD whose stored error is <= E (model units)");
+  CLI::Option* level = command.add_option(
+      "--level", choice.level, "The nodes at octree depth K (and leaves above it), finest LOD each");
+  error->excludes(level);
+}
+
+Status check_cut_choice(const CutChoice& choice, std::string_view command_name) {
+  if (choice.error.has_value() == choice.level.has_value())
+    return usage_error(std::string(command_name) + ": give exactly one of --error E or --level K");
+  if (choice.error && !(*choice.error >= 0 && std::isfinite(*choice.error)))
+    return usage_error("--error must be a finite distance >= 0 (model units)");
+  return {};
+}
+
+std::vector<CutEntry> select_cut(const Manifest& manifest, const CutChoice& choice) {
+  return choice.error ? uniform_error_cut(manifest, *choice.error)
+                      : depth_cut(manifest, *choice.level);
+}
+
+}  // namespace octolod::cli
