@@ -6,7 +6,6 @@
 #include <filesystem>
 #include <memory>
 #include <string>
-#include <system_error>
 #include <vector>
 
 #include "command.h"
@@ -54,9 +53,9 @@ int run_export(const ExportArgs& args, const CommandContext& context) {
   const Status written = write_gltf(args.output, meshes.value(), options);
   if (!written.ok()) return report(written);
 
-  std::error_code ec;
-  const std::uintmax_t bytes = std::filesystem::file_size(args.output, ec);
-  if (ec) return report(io_error(args.output + ": cannot stat the written file: " + ec.message()));
+  const Result<std::uint64_t> written_bytes = written_file_size(args.output);
+  if (!written_bytes.ok()) return report(written_bytes.status());
+  const std::uint64_t bytes = written_bytes.value();
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   const CutSummary summary = summarize_cut(manifest.value(), cut);

@@ -7,7 +7,6 @@
 #include <cstdio>
 #include <memory>
 #include <string>
-#include <system_error>
 
 #include "command.h"
 #include "mesh_file.h"
@@ -40,9 +39,9 @@ int run_reference(const ReferenceArgs& args, const CommandContext& context) {
       write_mesh_file(args.output, simplified.value(), args.ascii, input->color_type);
   if (!written.ok()) return report(written);
 
-  std::error_code ec;
-  const std::uintmax_t bytes = std::filesystem::file_size(args.output, ec);
-  if (ec) return report(io_error(args.output + ": cannot stat the written file: " + ec.message()));
+  const Result<std::uint64_t> written_bytes = written_file_size(args.output);
+  if (!written_bytes.ok()) return report(written_bytes.status());
+  const std::uint64_t bytes = written_bytes.value();
   if (context.json) {
     print_json({{"file", args.output},
                 {"input", args.input},

@@ -51,9 +51,9 @@ int run_sample(const SampleArgs& args, const CommandContext& context) {
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   progress.finish("sample", seconds);
 
-  std::error_code ec;
-  const std::uintmax_t bytes = std::filesystem::file_size(args.output, ec);
-  if (ec) return report(io_error(args.output + ": cannot stat the written file: " + ec.message()));
+  const Result<std::uint64_t> written_bytes = written_file_size(args.output);
+  if (!written_bytes.ok()) return report(written_bytes.status());
+  const std::uint64_t bytes = written_bytes.value();
   if (context.json) {
     print_json({{"file", args.output},
                 {"shape", std::string(to_string(spec.shape))},

@@ -24,6 +24,8 @@ int report(const Status& status);
 void print_json(const nlohmann::json& document);
 // Parses "64M", "512K", "2G", "1048576" (binary units) into bytes.
 Result<std::uint64_t> parse_byte_size(const std::string& text);
+// Size in bytes of a file a command has just written (for its summary); io error naming it.
+Result<std::uint64_t> written_file_size(const std::string& path);
 
 void add_sample_command(CLI::App& app, CommandContext& context);
 void add_walk_command(CLI::App& app, CommandContext& context);

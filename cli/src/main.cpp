@@ -2,7 +2,9 @@
 #include <unistd.h>
 
 #include <cstdio>
+#include <filesystem>
 #include <iostream>
+#include <system_error>
 
 #include "command.h"
 
@@ -14,6 +16,13 @@ int report(const Status& status) {
 }
 
 void print_json(const nlohmann::json& document) { std::cout << document.dump(2) << '\n'; }
+
+Result<std::uint64_t> written_file_size(const std::string& path) {
+  std::error_code ec;
+  const std::uintmax_t bytes = std::filesystem::file_size(path, ec);
+  if (ec) return io_error(path + ": cannot stat the written file: " + ec.message());
+  return static_cast<std::uint64_t>(bytes);
+}
 
 Result<std::uint64_t> parse_byte_size(const std::string& text) {
   std::size_t used = 0;
