@@ -266,6 +266,27 @@ TEST(QuadricTest, PlaneQuadricIsZeroOnThePlaneAndSquaredDistanceOffIt) {
   EXPECT_EQ(evaluate_quadric(3, quadric, off), 0.0);
 }
 
+TEST(QuadricTest, PlaneQuadricFromANormalEqualsTheTrianglesQuadric) {
+  // a sliver and a well-shaped triangle, the normal as the unnormalized cross product of edges
+  const double triangles[2][3][3] = {{{0.3, -1.2, 2.0}, {1.1, 0.4, 2.5}, {-0.2, 0.9, 1.7}},
+                                     {{5.0, 5.0, 5.0}, {6.0, 5.0, 5.001}, {5.5, 5.0002, 5.0005}}};
+  for (const auto& t : triangles) {
+    const double e1[3] = {t[1][0] - t[0][0], t[1][1] - t[0][1], t[1][2] - t[0][2]};
+    const double e2[3] = {t[2][0] - t[0][0], t[2][1] - t[0][1], t[2][2] - t[0][2]};
+    const double normal[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
+    double from_normal[kMaxQuadricDoubles], from_triangle[kMaxQuadricDoubles];
+    plane_quadric(normal, t[0], 1.7, from_normal);
+    triangle_quadric(3, t[0], t[1], t[2], 1.7, from_triangle);
+    for (std::size_t i = 0; i < quadric_doubles(3); ++i)
+      EXPECT_NEAR(from_normal[i], from_triangle[i], 1e-9 * (1 + std::fabs(from_triangle[i]))) << "entry " << i;
+  }
+  // a zero normal has no plane: zero quadric
+  const double zero[3] = {0, 0, 0}, p[3] = {1, 2, 3};
+  double quadric[kMaxQuadricDoubles];
+  plane_quadric(zero, p, 1.0, quadric);
+  for (std::size_t i = 0; i < quadric_doubles(3); ++i) EXPECT_EQ(quadric[i], 0.0);
+}
+
 TEST(QuadricTest, GeneralizedQuadricIsZeroOnTheTrianglesPlaneInRn) {
   // n = 5: position + uv with uv = (x + 2y, 3 - z): a point of the plane in R^5 has Q = 0, the
   // same position with a wrong uv has Q = distance^2 in R^5 to the plane

@@ -44,11 +44,11 @@ NodeMesh cluster_bade2006(const PreparedNode& node) {
     for (int k = 0; k < 3; ++k) local_vertex(mesh.indices[3 * t + static_cast<std::size_t>(k)], p[k]);
     const double e1[3] = {p[1][0] - p[0][0], p[1][1] - p[0][1], p[1][2] - p[0][2]};
     const double e2[3] = {p[2][0] - p[0][0], p[2][1] - p[0][1], p[2][2] - p[0][2]};
-    const double nx = e1[1] * e2[2] - e1[2] * e2[1], ny = e1[2] * e2[0] - e1[0] * e2[2],
-                 nz = e1[0] * e2[1] - e1[1] * e2[0];
-    const double area = 0.5 * std::sqrt(nx * nx + ny * ny + nz * nz);
+    const double normal[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2],
+                              e1[0] * e2[1] - e1[1] * e2[0]};
+    const double area = 0.5 * std::sqrt(normal[0] * normal[0] + normal[1] * normal[1] + normal[2] * normal[2]);
     double q[kMaxQuadricDoubles];
-    triangle_quadric(3, p[0], p[1], p[2], area, q);
+    plane_quadric(normal, p[0], area, q);
     add_quadric(3, position_quadric.data(), q);
     if (n > 3) {
       triangle_quadric(n, p[0], p[1], p[2], area, q);

@@ -30,41 +30,42 @@ using Vec = std::array<double, 3>;
 Vec sub(const Vec& a, const Vec& b) { return {a[0] - b[0], a[1] - b[1], a[2] - b[2]}; }
 double dot(const Vec& a, const Vec& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
 
-// Distance from p to triangle (a,b,c), Ericson 2005, 5.1.5 ClosestPtPointTriangle, in double.
-double point_triangle_distance(const Vec& p, const Vec& a, const Vec& b, const Vec& c) {
+// Squared distance from p to triangle (a,b,c), Ericson 2005, 5.1.5 ClosestPtPointTriangle, in
+// double. Squared: the bounds below only compare distances, one square root at the end.
+double point_triangle_distance2(const Vec& p, const Vec& a, const Vec& b, const Vec& c) {
   const Vec ab = sub(b, a), ac = sub(c, a), ap = sub(p, a);
-  auto dist_to = [&p](const Vec& q) { const Vec d = sub(p, q); return std::sqrt(dot(d, d)); };
+  auto dist2_to = [&p](const Vec& q) { const Vec d = sub(p, q); return dot(d, d); };
   auto lerp = [](const Vec& x, const Vec& y, double t) {
     return Vec{x[0] + t * (y[0] - x[0]), x[1] + t * (y[1] - x[1]), x[2] + t * (y[2] - x[2])};
   };
   const double d1 = dot(ab, ap), d2 = dot(ac, ap);
-  if (d1 <= 0.0 && d2 <= 0.0) return dist_to(a);
+  if (d1 <= 0.0 && d2 <= 0.0) return dot(ap, ap);
   const Vec bp = sub(p, b);
   const double d3 = dot(ab, bp), d4 = dot(ac, bp);
-  if (d3 >= 0.0 && d4 <= d3) return dist_to(b);
+  if (d3 >= 0.0 && d4 <= d3) return dot(bp, bp);
   const double vc = d1 * d4 - d3 * d2;
-  if (vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0) return dist_to(lerp(a, b, d1 / (d1 - d3)));
+  if (vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0) return dist2_to(lerp(a, b, d1 / (d1 - d3)));
   const Vec cp = sub(p, c);
   const double d5 = dot(ab, cp), d6 = dot(ac, cp);
-  if (d6 >= 0.0 && d5 <= d6) return dist_to(c);
+  if (d6 >= 0.0 && d5 <= d6) return dot(cp, cp);
   const double vb = d5 * d2 - d1 * d6;
-  if (vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0) return dist_to(lerp(a, c, d2 / (d2 - d6)));
+  if (vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0) return dist2_to(lerp(a, c, d2 / (d2 - d6)));
   const double va = d3 * d6 - d5 * d4;
   if (va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0)
-    return dist_to(lerp(b, c, (d4 - d3) / ((d4 - d3) + (d5 - d6))));
+    return dist2_to(lerp(b, c, (d4 - d3) / ((d4 - d3) + (d5 - d6))));
   const double denom = va + vb + vc;
   if (!(denom > 0.0)) {  // degenerate triangle: its edges
-    double best = std::min({dist_to(a), dist_to(b), dist_to(c)});
+    double best = std::min({dot(ap, ap), dot(bp, bp), dot(cp, cp)});
     const Vec* ends[3][2] = {{&a, &b}, {&b, &c}, {&c, &a}};
     for (const auto& e : ends) {
       const Vec d = sub(*e[1], *e[0]);
       const double len2 = dot(d, d);
-      if (len2 > 0.0) best = std::min(best, dist_to(lerp(*e[0], *e[1], std::clamp(dot(sub(p, *e[0]), d) / len2, 0.0, 1.0))));
+      if (len2 > 0.0) best = std::min(best, dist2_to(lerp(*e[0], *e[1], std::clamp(dot(sub(p, *e[0]), d) / len2, 0.0, 1.0))));
     }
     return best;
   }
   const double v = vb / denom, w = vc / denom;
-  return dist_to({a[0] + ab[0] * v + ac[0] * w, a[1] + ab[1] * v + ac[1] * w, a[2] + ab[2] * v + ac[2] * w});
+  return dist2_to({a[0] + ab[0] * v + ac[0] * w, a[1] + ab[1] * v + ac[1] * w, a[2] + ab[2] * v + ac[2] * w});
 }
 
 constexpr int kMaxRefineDepth = 4;
@@ -83,8 +84,8 @@ class Bounder {
     return {f[0], f[1], f[2]};
   }
   double distance(const Vec& p, std::uint32_t output_triangle) const {
-    return point_triangle_distance(p, position(output_triangle, 0), position(output_triangle, 1),
-                                   position(output_triangle, 2));
+    return std::sqrt(point_triangle_distance2(p, position(output_triangle, 0), position(output_triangle, 1),
+                                              position(output_triangle, 2)));
   }
   // Nearest output triangle to p and the distance to it (double precision).
   std::pair<std::uint32_t, double> nearest(const Vec& p) const {
@@ -230,19 +231,33 @@ double hausdorff_upper_bound(const NodeMesh& input, const NodeMesh& output, cons
     return hints.fan_triangle.subspan(hints.fan_offset[c], hints.fan_offset[c + 1] - hints.fan_offset[c]);
   };
 
-  // a first total: every input vertex's distance to the nearest triangle of its cluster's fan
-  // (each is the bound of a degenerate triangle, so the final total is at least their max, and
-  // a high total early lets most triangles below skip their exact distances)
-  double total = 0.0;
+  // Squared distances below: a first total, every input vertex's distance to the nearest
+  // triangle of its cluster's fan (each is the bound of a degenerate triangle, so the final total
+  // is at least their max, and a high total early lets most triangles below skip their exact
+  // distances). A vertex stops at the first fan triangle within the total: it cannot raise it.
+  // |x - corner| bounds dist(x, T) from above, so a corner within the total settles it too.
+  auto near_corner = [](const Vec& x, const std::array<Vec, 3>& tri, double limit2) {
+    for (const Vec& corner : tri) {
+      const Vec d = sub(x, corner);
+      if (dot(d, d) <= limit2) return true;
+    }
+    return false;
+  };
+  double total2 = 0.0;
   if (have_fans) {
     for (std::uint32_t v = 0; v < input.vertex_count(); ++v) {
-      double best = std::numeric_limits<double>::infinity();
+      double best2 = std::numeric_limits<double>::infinity();
       const Vec p = input_position(v);
       for (std::uint32_t triangle : fan(v)) {
         const auto t = output_triangle(triangle);
-        best = std::min(best, point_triangle_distance(p, t[0], t[1], t[2]));
+        if (near_corner(p, t, total2)) {
+          best2 = total2;
+          break;
+        }
+        best2 = std::min(best2, point_triangle_distance2(p, t[0], t[1], t[2]));
+        if (best2 <= total2) break;
       }
-      if (best < std::numeric_limits<double>::infinity()) total = std::max(total, best);
+      if (best2 < std::numeric_limits<double>::infinity()) total2 = std::max(total2, best2);
     }
   }
 
@@ -250,37 +265,37 @@ double hausdorff_upper_bound(const NodeMesh& input, const NodeMesh& output, cons
   for (std::size_t t = 0; t < input.triangle_count(); ++t) {
     const std::uint32_t* corner = &input.indices[3 * t];
     const std::array<Vec, 3> p{input_position(corner[0]), input_position(corner[1]), input_position(corner[2])};
-    // max over the corners of the distance to output triangle `candidate`; stops early once it
-    // reaches `enough` (then returns a value >= enough, only good for taking a minimum)
-    auto corner_bound = [&](std::uint32_t candidate, double enough) {
+    // max over the corners of the squared distance to output triangle `candidate`; stops early
+    // once it reaches `enough2` (then returns a value >= enough2, only good for taking a minimum)
+    auto corner_bound2 = [&](std::uint32_t candidate, double enough2) {
       const auto tri = output_triangle(candidate);
-      double worst = 0.0;
+      double worst2 = 0.0;
       for (const Vec& x : p) {
-        const Vec xa = sub(x, tri[0]);
-        if (dot(xa, xa) <= worst * worst) continue;  // |x - a| bounds dist(x, T) from above
-        worst = std::max(worst, point_triangle_distance(x, tri[0], tri[1], tri[2]));
-        if (worst >= enough) break;
+        if (near_corner(x, tri, worst2)) continue;
+        worst2 = std::max(worst2, point_triangle_distance2(x, tri[0], tri[1], tri[2]));
+        if (worst2 >= enough2) break;
       }
-      return worst;
+      return worst2;
     };
     const std::uint32_t hint = hints.nearby_output_triangle.empty() ? kNoHint : hints.nearby_output_triangle[t];
-    double best = std::numeric_limits<double>::infinity();
+    double best2 = std::numeric_limits<double>::infinity();
     if (hint != kNoHint && hint < output.triangle_count()) {
-      best = corner_bound(hint, std::numeric_limits<double>::infinity());
-      if (best <= total) continue;
+      best2 = corner_bound2(hint, std::numeric_limits<double>::infinity());
+      if (best2 <= total2) continue;
     }
     if (have_fans) {
       for (std::uint32_t v : {corner[0], corner[1], corner[2]}) {
         for (std::uint32_t candidate : fan(v)) {
-          best = std::min(best, corner_bound(candidate, best));
-          if (best <= total) break;
+          best2 = std::min(best2, corner_bound2(candidate, best2));
+          if (best2 <= total2) break;
         }
-        if (best <= total) break;
+        if (best2 <= total2) break;
       }
     }
-    if (best == std::numeric_limits<double>::infinity()) unresolved.push_back(static_cast<std::uint32_t>(t));
-    else total = std::max(total, best);
+    if (best2 == std::numeric_limits<double>::infinity()) unresolved.push_back(static_cast<std::uint32_t>(t));
+    else total2 = std::max(total2, best2);
   }
+  double total = std::sqrt(total2);
   if (!unresolved.empty()) total = bvh_bound(input, output, unresolved, total);
   return total * (1.0 + 1e-6);
 }

@@ -161,14 +161,11 @@ void triangle_quadric(int n, const double* p, const double* q, const double* r, 
   if (!(len2 > 1e-12 * len1)) return;
   for (int i = 0; i < n; ++i) e2[static_cast<std::size_t>(i)] /= len2;
 
-  double* a = out;
+  double* a = out;  // packed upper triangle, row by row
   for (int i = 0; i < n; ++i) {
-    const auto ui = static_cast<std::size_t>(i);
-    for (int j = i; j < n; ++j) {
-      const auto uj = static_cast<std::size_t>(j);
-      const double v = (i == j ? 1.0 : 0.0) - e1[ui] * e1[uj] - e2[ui] * e2[uj];
-      a[packed_index(n, i, j)] = weight * v;
-    }
+    const double w1 = weight * e1[static_cast<std::size_t>(i)], w2 = weight * e2[static_cast<std::size_t>(i)];
+    *a++ = weight - w1 * e1[static_cast<std::size_t>(i)] - w2 * e2[static_cast<std::size_t>(i)];
+    for (int j = i + 1; j < n; ++j) *a++ = -w1 * e1[static_cast<std::size_t>(j)] - w2 * e2[static_cast<std::size_t>(j)];
   }
   double* b = out + n * (n + 1) / 2;
   const double pe1 = dot(n, p, e1.data());
@@ -178,6 +175,24 @@ void triangle_quadric(int n, const double* p, const double* q, const double* r, 
     b[i] = weight * (pe1 * e1[ui] + pe2 * e2[ui] - p[i]);
   }
   out[count - 1] = weight * (dot(n, p, p) - pe1 * pe1 - pe2 * pe2);
+}
+
+void plane_quadric(const double* normal, const double* p, double weight, double* out) {
+  const double len2 = normal[0] * normal[0] + normal[1] * normal[1] + normal[2] * normal[2];
+  if (!(len2 > 0.0) || weight <= 0.0) {
+    std::fill(out, out + quadric_doubles(3), 0.0);
+    return;
+  }
+  const double scale = weight / len2;  // A = weight * n n^T / |n|^2
+  const double d = -(normal[0] * p[0] + normal[1] * p[1] + normal[2] * p[2]);  // plane: n.x + d = 0
+  out[0] = scale * normal[0] * normal[0];
+  out[1] = scale * normal[0] * normal[1];
+  out[2] = scale * normal[0] * normal[2];
+  out[3] = scale * normal[1] * normal[1];
+  out[4] = scale * normal[1] * normal[2];
+  out[5] = scale * normal[2] * normal[2];
+  for (int i = 0; i < 3; ++i) out[6 + i] = scale * d * normal[i];
+  out[9] = scale * d * d;
 }
 
 double evaluate_quadric(int n, const double* q, const double* v) {

@@ -31,6 +31,12 @@ inline constexpr std::size_t kMaxQuadricDoubles = quadric_doubles(kMaxQuadricDim
 void triangle_quadric(int n, const double* p, const double* q, const double* r, double weight,
                       double* out);
 
+// The n = 3 quadric of the plane through p (3 values) with normal `normal` (any length), times
+// weight: the same quadric as triangle_quadric(3, ...) of a triangle with that plane, from a
+// normal the caller already has (a cross product of two edges) instead of an orthonormal basis.
+// A zero normal, or weight 0, writes zeros.
+void plane_quadric(const double* normal, const double* p, double weight, double* out);
+
 // acc += q, both of dimension n.
 inline void add_quadric(int n, double* acc, const double* q) {
   const std::size_t count = quadric_doubles(n);

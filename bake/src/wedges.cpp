@@ -224,7 +224,7 @@ ClusteredMesh build_clustered_mesh(const NodeMesh& mesh, const Clustering& clust
     for (int k = 0; k < 3; ++k) local_vertex(corner[k], p[k]);
     double quadric3[quadric_doubles(3)];
     double quadric_n[kMaxQuadricDoubles];
-    triangle_quadric(3, p[0], p[1], p[2], area, quadric3);
+    plane_quadric(fn.data(), p[0], area, quadric3);
     if (attribute_count > 0) {
       for (int k = 0; k < 3; ++k)
         for (int i = 0; i < 3; ++i) p[k][i] *= position_scale;
