@@ -1,5 +1,10 @@
 #include <gtest/gtest.h>
 
+#include <fstream>
+#include <sstream>
+
+#include <nlohmann/json.hpp>
+
 #include "octolod/formats/manifest.h"
 
 namespace octolod {
@@ -42,6 +47,24 @@ TEST(Manifest, JsonRoundTripKeepsEveryField) {
   EXPECT_EQ(back->nodes[0].child_mask(), 0b100001);
   EXPECT_EQ(back->layout, m.layout);
   EXPECT_DOUBLE_EQ(back->nodes[0].lods[0].error, 0.25);
+}
+
+// The manifest is written node by node, never as one document: its text must still be exactly
+// the whole document's dump(1) (keys sorted, one space per level), with and without nodes.
+TEST(Manifest, StreamedTextIsTheWholeDocumentsDump) {
+  Manifest m = small_manifest();
+  for (int with_nodes = 1; with_nodes >= 0; --with_nodes) {
+    if (!with_nodes) m.nodes.clear();
+    const std::string text = manifest_to_json(m);
+    EXPECT_EQ(text, nlohmann::json::parse(text).dump(1) + "\n") << text;
+  }
+  auto path = std::filesystem::path(::testing::TempDir()) / "manifest_stream_test.json";
+  ASSERT_TRUE(write_manifest(path, small_manifest()).ok());
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream written;
+  written << in.rdbuf();
+  EXPECT_EQ(written.str(), manifest_to_json(small_manifest()));
+  std::filesystem::remove(path);
 }
 
 TEST(Manifest, RejectsChildNamingAnotherParent) {

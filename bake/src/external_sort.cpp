@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "octolod/bake/temp_file.h"
+#include "page_array.h"
 #include "record_file.h"
 
 namespace octolod::bake {
@@ -115,16 +116,16 @@ struct SortedRun {
 struct RunBuffer {
   std::size_t record_bytes = 0;
   std::size_t capacity = 0;  // records
-  std::unique_ptr<std::byte[]> records;
-  std::unique_ptr<std::uint64_t[]> key_storage;    // 2 * capacity
-  std::unique_ptr<std::uint32_t[]> order_storage;  // 2 * capacity
+  PageArray<std::byte> records;
+  PageArray<std::uint64_t> key_storage;    // 2 * capacity
+  PageArray<std::uint32_t> order_storage;  // 2 * capacity
 
   void allocate(std::size_t rb, std::size_t cap) {
     record_bytes = rb;
     capacity = cap;
-    records = std::make_unique_for_overwrite<std::byte[]>(cap * rb);
-    key_storage = std::make_unique_for_overwrite<std::uint64_t[]>(2 * cap);
-    order_storage = std::make_unique_for_overwrite<std::uint32_t[]>(2 * cap);
+    records = PageArray<std::byte>(cap * rb);
+    key_storage = PageArray<std::uint64_t>(2 * cap);
+    order_storage = PageArray<std::uint32_t>(2 * cap);
   }
   void release() {
     records.reset();
@@ -330,7 +331,7 @@ class ExternalSorter final : public RecordSorter {
     assert(state_ == State::input && "RecordSorter::finish called twice");
     Stopwatch watch(stats_.seconds);
     OCTOLOD_RETURN_IF_ERROR(wait_for_spill());
-    out_ = std::make_unique_for_overwrite<std::byte[]>(out_bytes_);
+    out_ = PageArray<std::byte>(out_bytes_);
     if (runs_.empty()) {
       // In-core fast path: one in-memory sort, no temporary file.
       stats_.in_core = true;
@@ -532,7 +533,7 @@ class ExternalSorter final : public RecordSorter {
   SortedRun sorted_;  // the in-core fast path's output
   std::vector<TempFile> runs_;
   KWayMerge final_;
-  std::unique_ptr<std::byte[]> out_;
+  PageArray<std::byte> out_;
   SortStats stats_;
 };
 

@@ -63,7 +63,7 @@ Result<RecordWriter> RecordWriter::create(const std::filesystem::path& path,
   w.capacity_ = whole_records(buffer_bytes, record_bytes);
   w.fd_ = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
   if (w.fd_ < 0) return os_error("cannot create", path, errno);
-  w.buffer_ = std::make_unique_for_overwrite<std::byte[]>(w.capacity_);
+  w.buffer_ = PageArray<std::byte>(w.capacity_);
   return w;
 }
 
@@ -172,7 +172,7 @@ Result<RecordReader> RecordReader::open(const std::filesystem::path& path,
   const std::uint64_t file_bytes = std::max<std::uint64_t>(size, record_bytes);
   r.capacity_ = whole_records(
       static_cast<std::size_t>(std::min<std::uint64_t>(buffer_bytes, file_bytes)), record_bytes);
-  r.buffer_ = std::make_unique_for_overwrite<std::byte[]>(r.capacity_);
+  r.buffer_ = PageArray<std::byte>(r.capacity_);
   return r;
 }
 

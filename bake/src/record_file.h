@@ -13,6 +13,7 @@
 #include <span>
 
 #include "octolod/formats/status.h"
+#include "page_array.h"
 
 namespace octolod::bake {
 
@@ -48,7 +49,7 @@ class RecordWriter {
   std::filesystem::path path_;
   int fd_ = -1;
   std::size_t record_bytes_ = 0;
-  std::unique_ptr<std::byte[]> buffer_;
+  PageArray<std::byte> buffer_;
   std::size_t capacity_ = 0;  // bytes, a multiple of record_bytes_
   std::size_t used_ = 0;      // bytes
   std::uint64_t records_ = 0;
@@ -83,7 +84,7 @@ class RecordReader {
   std::filesystem::path path_;
   int fd_ = -1;
   std::size_t record_bytes_ = 0;
-  std::unique_ptr<std::byte[]> buffer_;
+  PageArray<std::byte> buffer_;
   std::size_t capacity_ = 0;  // bytes, a multiple of record_bytes_
   std::size_t begin_ = 0;     // bytes of the buffer already handed out
   std::size_t end_ = 0;       // bytes of the buffer filled

@@ -15,6 +15,7 @@
 #include <utility>
 
 #include "dereference.h"
+#include "page_array.h"
 #include "octolod/formats/ply_reader.h"
 #include "record_file.h"
 #include "split.h"
@@ -56,7 +57,7 @@ class SoupOutput final : public RecordOutput {
     if (options.sink) {
       out->sink_ = &options.sink;
       out->batch_records_ = std::max<std::size_t>(1, io / record_bytes);
-      out->batch_ = std::make_unique_for_overwrite<std::byte[]>(out->batch_records_ * record_bytes);
+      out->batch_ = PageArray<std::byte>(out->batch_records_ * record_bytes);
       return out;
     }
     file = make_temp_file(options.work_dir, "soup");
@@ -85,7 +86,7 @@ class SoupOutput final : public RecordOutput {
   std::size_t record_bytes_;
   std::optional<RecordWriter> writer_;
   const std::function<Status(std::span<const std::byte>)>* sink_ = nullptr;
-  std::unique_ptr<std::byte[]> batch_;
+  PageArray<std::byte> batch_;
   std::size_t batch_records_ = 0;
 };
 
@@ -174,7 +175,7 @@ class SoupBuilder {
   Status run_in_core(std::uint64_t vertex_count) {
     const std::size_t floats = layout_.floats();
     const std::uint64_t vertex_array_bytes = vertex_count * layout_.bytes();
-    auto vertices = std::make_unique_for_overwrite<float[]>(vertex_count * floats);
+    PageArray<float> vertices(vertex_count * floats);
     // Budget: the vertex array and the sort throughout, plus the PLY reader and the triangle
     // batch while splitting, then the output batch and the soup writer. The array is at most
     // half the budget, so the sort gets at least 1/4 of it minus the reader's file buffer.

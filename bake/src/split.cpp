@@ -9,6 +9,7 @@
 #include <utility>
 
 #include "octolod/bake/temp_file.h"
+#include "page_array.h"
 #include "record_file.h"
 
 namespace octolod::bake {
@@ -19,7 +20,7 @@ Result<SplitResult> split_ply(PlyReader& reader, std::size_t batch_bytes, const 
   result.vertex_count = reader.info().vertex_count;
   const std::size_t floats = result.layout.floats();
   const std::size_t batch_records = std::max<std::size_t>(1, batch_bytes / sizeof(TriangleRecord));
-  const auto batch = std::make_unique_for_overwrite<TriangleRecord[]>(batch_records);
+  const PageArray<TriangleRecord> batch(batch_records);
   std::uint64_t done = 0;
   for (;;) {
     auto next = reader.next();

@@ -5,6 +5,8 @@
 #include <cstdio>
 #include <cstring>
 #include <fstream>
+#include <functional>
+#include <string_view>
 #include <sstream>
 #include <unistd.h>
 
@@ -81,43 +83,102 @@ Status validate(const Manifest& m, std::string_view name) {
   return {};
 }
 
+
+// `value` as json::dump(1) writes it at nesting `level`: continuation lines get `level` more
+// spaces (JSON strings hold no raw newline, so every '\n' is a line break).
+void append_nested(std::string& out, const json& value, std::size_t level) {
+  const std::string text = value.dump(1);
+  for (char c : text) {
+    out += c;
+    if (c == '\n') out.append(level, ' ');
+  }
+}
+
+json node_to_json(const NodeInfo& n) {
+  json lods = json::array();
+  for (const LodInfo& l : n.lods)
+    lods.push_back({{"triangles", l.triangles}, {"vertices", l.vertices}, {"error", l.error},
+                    {"bytes", l.bytes}, {"file", l.file}});
+  return {{"path", n.path},
+          {"depth", n.depth},
+          {"parent", n.parent},
+          {"children", n.children},
+          {"child_mask", n.child_mask()},
+          {"cell", bounds_to_json(n.cell)},
+          {"bounds", bounds_to_json(n.bounds)},
+          {"source_triangles", n.source_triangles},
+          {"lods", lods}};
+}
+
+// The manifest's text, exactly as dump(1) of the whole document would write it (keys sorted,
+// one space per level), handed to `out` piece by piece: the header members, then one node at a
+// time, so the memory is one node's JSON, not the tree's (about 1.5 KB per node as a DOM).
+// Stops at the first false `out` returns; returns whether every piece was taken.
+bool emit_manifest(const Manifest& m, const std::function<bool(std::string_view)>& out) {
+  const BakeParameters& p = m.parameters;
+  const json head{{"format", "octolod-manifest"},
+                  {"version", m.version},
+                  {"layout", layout_to_json(m.layout)},
+                  {"bounds", bounds_to_json(m.bounds)},
+                  {"input_vertices", m.input_vertices},
+                  {"input_triangles", m.input_triangles},
+                  {"parameters",
+                   {{"input", p.input},
+                    {"max_tris", p.max_tris},
+                    {"max_depth", p.max_depth},
+                    {"memory_budget_bytes", p.memory_budget_bytes},
+                    {"threads", p.threads},
+                    {"method", p.method}}},
+                  {"stage_seconds", m.stage_seconds},
+                  {"stats", m.stats}};
+  std::string piece = "{\n";
+  bool first_member = true;
+  const auto start_member = [&](const std::string& key) {
+    if (!first_member) piece += ",\n";
+    first_member = false;
+    piece += ' ';
+    piece += json(key).dump();
+    piece += ": ";
+  };
+  const auto emit_nodes = [&] {
+    start_member("nodes");
+    if (m.nodes.empty()) {
+      piece += "[]";
+      return true;
+    }
+    piece += "[\n";
+    for (std::size_t i = 0; i < m.nodes.size(); ++i) {
+      piece += "  ";
+      append_nested(piece, node_to_json(m.nodes[i]), 2);
+      piece += i + 1 < m.nodes.size() ? ",\n" : "\n ]";
+      if (!out(piece)) return false;
+      piece.clear();
+    }
+    return true;
+  };
+  bool nodes_done = false;
+  for (const auto& [key, value] : head.items()) {  // sorted by key, as dump() orders them
+    if (!nodes_done && key > "nodes") {
+      if (!emit_nodes()) return false;
+      nodes_done = true;
+    }
+    start_member(key);
+    append_nested(piece, value, 1);
+  }
+  if (!nodes_done && !emit_nodes()) return false;
+  piece += "\n}\n";
+  return out(piece);
+}
+
 }  // namespace
 
 std::string manifest_to_json(const Manifest& m) {
-  json nodes = json::array();
-  for (const NodeInfo& n : m.nodes) {
-    json lods = json::array();
-    for (const LodInfo& l : n.lods)
-      lods.push_back({{"triangles", l.triangles}, {"vertices", l.vertices}, {"error", l.error},
-                      {"bytes", l.bytes}, {"file", l.file}});
-    nodes.push_back({{"path", n.path},
-                     {"depth", n.depth},
-                     {"parent", n.parent},
-                     {"children", n.children},
-                     {"child_mask", n.child_mask()},
-                     {"cell", bounds_to_json(n.cell)},
-                     {"bounds", bounds_to_json(n.bounds)},
-                     {"source_triangles", n.source_triangles},
-                     {"lods", lods}});
-  }
-  const BakeParameters& p = m.parameters;
-  json doc{{"format", "octolod-manifest"},
-           {"version", m.version},
-           {"layout", layout_to_json(m.layout)},
-           {"bounds", bounds_to_json(m.bounds)},
-           {"input_vertices", m.input_vertices},
-           {"input_triangles", m.input_triangles},
-           {"parameters",
-            {{"input", p.input},
-             {"max_tris", p.max_tris},
-             {"max_depth", p.max_depth},
-             {"memory_budget_bytes", p.memory_budget_bytes},
-             {"threads", p.threads},
-             {"method", p.method}}},
-           {"stage_seconds", m.stage_seconds},
-           {"stats", m.stats},
-           {"nodes", nodes}};
-  return doc.dump(1) + "\n";
+  std::string text;
+  emit_manifest(m, [&](std::string_view piece) {
+    text += piece;
+    return true;
+  });
+  return text;
 }
 
 Result<Manifest> manifest_from_json(std::string_view text, std::string_view name) {
@@ -171,16 +232,24 @@ Result<Manifest> manifest_from_json(std::string_view text, std::string_view name
 }
 
 Status write_manifest(const std::filesystem::path& path, const Manifest& manifest) {
-  const std::string text = manifest_to_json(manifest);
   std::filesystem::path tmp = path;
   tmp += ".tmp-" + std::to_string(::getpid());
   std::FILE* f = std::fopen(tmp.c_str(), "wb");
   if (!f) return io_error(tmp.string() + ": cannot create: " + std::strerror(errno));
-  bool ok = std::fwrite(text.data(), 1, text.size(), f) == text.size();
-  int saved = errno;
-  ok = (std::fflush(f) == 0) && ok;
-  if (!ok) saved = errno;
-  ok = (std::fclose(f) == 0) && ok;
+  int saved = 0;
+  bool ok = emit_manifest(manifest, [&](std::string_view piece) {
+    if (std::fwrite(piece.data(), 1, piece.size(), f) == piece.size()) return true;
+    saved = errno;
+    return false;
+  });
+  if (ok && std::fflush(f) != 0) {
+    ok = false;
+    saved = errno;
+  }
+  if (std::fclose(f) != 0 && ok) {
+    ok = false;
+    saved = errno;
+  }
   std::error_code ec;
   if (!ok) {
     std::filesystem::remove(tmp, ec);
