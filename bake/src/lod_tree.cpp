@@ -26,7 +26,7 @@ std::size_t mesh_bytes(const NodeMesh& mesh) {
   return (mesh.vertices.size() + mesh.indices.size()) * sizeof(float);
 }
 
-// A child's first simplified LOD as its parent will merge it.
+// A child's LOD 0 as its parent will merge it.
 struct ChildLod {
   bool present = false;
   bool in_memory = false;  // else re-read `file`
@@ -71,9 +71,8 @@ bool later(const Task& a, const Task& b) {
 // What a finished node hands back to the scheduler.
 struct NodeDone {
   NodeLods lods;
-  NodeMesh first;  // the first simplified LOD (or LOD 0), for the parent
-  std::size_t first_index = 0;
-  double first_error = 0;
+  NodeMesh finest;  // LOD 0, for the parent
+  double finest_error = 0;
 };
 
 // A thread's reusable buffers.
@@ -308,7 +307,7 @@ class LodTreeBuilder::Impl {
     return {};
   }
 
-  // Writes lod<i>.olod for every LOD; the first simplified one is kept for the parent.
+  // Writes lod<i>.olod for every LOD; LOD 0 is kept for the parent.
   Result<NodeDone> write_lods(const std::string& dir, std::vector<Lod>& lods) const {
     OCTOLOD_RETURN_IF_ERROR(make_directory(dir));
     NodeDone done;
@@ -326,14 +325,13 @@ class LodTreeBuilder::Impl {
       done.lods.lods.push_back(std::move(info));
     }
     if (!lods.empty()) {
-      done.first_index = lods.size() > 1 ? 1 : 0;
-      done.first_error = lods[done.first_index].error;
-      done.first = std::move(lods[done.first_index].mesh);
+      done.finest_error = lods[0].error;
+      done.finest = std::move(lods[0].mesh);
     }
     return done;
   }
 
-  // A node's chain is complete: record it and hand its first simplified LOD to the parent,
+  // A node's chain is complete: record it and hand its LOD 0 to the parent,
   // which becomes ready with its last child. Under the lock.
   void deliver(std::int32_t node, NodeDone done) {
     ++completed_;
@@ -341,7 +339,7 @@ class LodTreeBuilder::Impl {
     const std::int32_t parent = s.parent;
     const std::uint32_t octant = s.octant;
     const bool has_lod = options_.build_lods && !done.lods.lods.empty();
-    const std::string first_file = has_lod ? done.lods.lods[done.first_index].file : "";
+    const std::string finest_file = has_lod ? done.lods.lods[0].file : "";
     results_[static_cast<std::size_t>(node)] = std::move(done.lods);
     if (parent < 0) return;
     Slot& p = slots_[static_cast<std::size_t>(parent)];
@@ -350,14 +348,14 @@ class LodTreeBuilder::Impl {
       if (!p.child) p.child = std::make_unique<std::array<ChildLod, 8>>();
       ChildLod& c = (*p.child)[octant];
       c.present = true;
-      c.error = done.first_error;
-      c.file = first_file;
-      p.child_triangles += done.first.triangle_count();
-      const std::size_t bytes = mesh_bytes(done.first);
+      c.error = done.finest_error;
+      c.file = finest_file;
+      p.child_triangles += done.finest.triangle_count();
+      const std::size_t bytes = mesh_bytes(done.finest);
       if (kept_bytes_ + bytes <= options_.keep_bytes) {
         c.in_memory = true;
         c.bytes = bytes;
-        c.mesh = std::move(done.first);
+        c.mesh = std::move(done.finest);
         kept_bytes_ += bytes;
         stats_.peak_kept_bytes = std::max<std::uint64_t>(stats_.peak_kept_bytes, kept_bytes_);
       }
