@@ -1,11 +1,14 @@
-// selection_bench: per-frame cost of StreamingTree::update() (selection, fallbacks, paging
-// decisions; loads run between frames, outside the timing) on a synthetic octree of ~100K nodes:
-// the cells of a sphere shell refined to --depth (8 -> ~120K nodes), every node with two LODs.
-// Cameras orbit the model at several radii; prints selection_ms p50/p99/max per orbit (wall time)
-// and the update thread's CPU time (cpu_*: the same without preemption by other processes).
-// Target (ARCHITECTURE.md / runtime brief): p99 <= 0.2 ms.
+// selection_bench: per-frame cost of StreamingTree::update() (selection, fallbacks, paging and
+// prefetch decisions; loads run between frames, outside the timing) on a synthetic octree: the
+// cells of a sphere shell of radius --shell refined to --depth, every node with two LODs
+// (depth 8: shell 0.8 -> 263,585 nodes, shell 0.5 -> ~100K). Cameras orbit the model at 5, 2.5,
+// 1.5 and 1.19 shell radii; prints per orbit the p50/p99/max of FrameStats::selection_ms (wall
+// time of update(), the quantity `octolod walk` reports) and of selection_cpu_ms (cpu_*: the
+// update thread's CPU time, the same without preemption by other processes).
+// Target (issue 5): p99 <= 0.2 ms per frame on ~100K nodes.
 //
-//   selection_bench [--depth 8] [--frames 2000] [--budget-mb 512]   (NOPREFETCH=1: prefetch off)
+//   selection_bench [--depth 8] [--shell 0.8] [--frames 2000] [--budget-mb 512]
+//   (NOPREFETCH=1: prefetch off)
 #include <algorithm>
 #include <charconv>
 #include <cmath>
@@ -24,10 +27,9 @@ namespace {
 using namespace octolod;
 using namespace octolod::runtime;
 
-constexpr float kShellRadius = 0.8f;
 constexpr std::uint32_t kTriangles[2] = {256, 64};
 
-bool touches_shell(const Bounds& b) {
+bool touches_shell(const Bounds& b, float shell) {
   float near2 = 0, far2 = 0;
   for (std::size_t a = 0; a < 3; ++a) {
     const float lo = b.min[a], hi = b.max[a];
@@ -36,10 +38,10 @@ bool touches_shell(const Bounds& b) {
     near2 += n * n;
     far2 += f * f;
   }
-  return near2 <= kShellRadius * kShellRadius && far2 >= kShellRadius * kShellRadius;
+  return near2 <= shell * shell && far2 >= shell * shell;
 }
 
-Manifest shell_octree(std::uint32_t max_depth) {
+Manifest shell_octree(std::uint32_t max_depth, float shell) {
   Manifest m;
   m.bounds.min = {-1, -1, -1};
   m.bounds.max = {1, 1, 1};
@@ -57,7 +59,7 @@ Manifest shell_octree(std::uint32_t max_depth) {
         child.cell.min[a] = ((octant >> a) & 1u) ? mid : lo;
         child.cell.max[a] = ((octant >> a) & 1u) ? hi : mid;
       }
-      if (!touches_shell(child.cell)) continue;
+      if (!touches_shell(child.cell, shell)) continue;
       child.bounds = child.cell;
       m.nodes[i].children[octant] = static_cast<std::int32_t>(m.nodes.size());
       m.nodes.push_back(child);
@@ -112,22 +114,29 @@ double percentile(std::vector<double> v, double p) {
 int main(int argc, char** argv) {
   std::uint32_t depth = 8, frames = 2000;
   std::uint64_t budget_mb = 512;
+  float shell = 0.8f;
   for (int i = 1; i + 1 < argc; i += 2) {
     if (!std::strcmp(argv[i], "--depth")) depth = static_cast<std::uint32_t>(std::stoul(argv[i + 1]));
     else if (!std::strcmp(argv[i], "--frames")) frames = static_cast<std::uint32_t>(std::stoul(argv[i + 1]));
     else if (!std::strcmp(argv[i], "--budget-mb")) budget_mb = std::stoull(argv[i + 1]);
+    else if (!std::strcmp(argv[i], "--shell")) shell = std::stof(argv[i + 1]);
     else {
-      std::fprintf(stderr, "usage: selection_bench [--depth N] [--frames N] [--budget-mb N]\n");
+      std::fprintf(stderr, "usage: selection_bench [--depth N] [--shell R] [--frames N] [--budget-mb N]\n");
       return 1;
     }
   }
-  const Manifest manifest = shell_octree(depth);
-  std::printf("synthetic shell octree: depth %u, %zu nodes; %u frames per orbit, budget %llu MiB\n",
-              depth, manifest.nodes.size(), frames, static_cast<unsigned long long>(budget_mb));
+  if (!(shell > 0.0f && shell < 1.0f)) {
+    std::fprintf(stderr, "error: --shell must be within (0, 1)\n");
+    return 1;
+  }
+  const Manifest manifest = shell_octree(depth, shell);
+  std::printf("synthetic shell octree: depth %u, shell radius %.2f, %zu nodes; %u frames per orbit, budget %llu MiB\n",
+              depth, static_cast<double>(shell), manifest.nodes.size(), frames, static_cast<unsigned long long>(budget_mb));
   std::printf("%-8s %8s %8s %8s %8s %9s %9s %9s %9s %9s %9s\n", "orbit_r", "visited", "wanted", "drawn", "tris",
               "p50_ms", "p99_ms", "max_ms", "cpu_p50", "cpu_p99", "cpu_max");
 
-  for (const float radius : {4.0f, 2.0f, 1.2f, 0.95f}) {
+  for (const float orbit : {5.0f, 2.5f, 1.5f, 1.1875f}) {
+    const float radius = orbit * shell;
     auto executor = std::make_shared<SynchronousExecutor>();
     StreamingOptions options;
     options.max_resident_bytes = budget_mb << 20;

@@ -462,6 +462,27 @@ TEST(Paging, PrefetchLoadsTheNeighboursOfTheCut) {
   EXPECT_FALSE(without.streaming->is_resident(without.tree.node_at("7/7"), 1));
 }
 
+TEST(Paging, PrefetchPlanningSpreadOverFramesReachesEveryNeighbour) {
+  // Cut: the 8 depth-1 nodes at LOD 0. Their neighbours are their LOD 1 and their 64 children's
+  // coarsest LODs; with 2 checks per frame, one cut entry's neighbours are planned per frame,
+  // round robin, so after the cut has loaded they all arrive within a few frames more.
+  StreamingOptions options;
+  options.prefetch_checks_per_frame = 2;
+  options.prediction_visits_per_frame = 1;
+  Fixture fx(3, options);
+  const Camera camera = front(200.0f);
+  std::uint32_t most_prefetches = 0;
+  for (int i = 0; i < 30; ++i) {
+    const FrameResult& frame = fx.streaming->update(camera);
+    // frame 0 queues the root and the cut; from frame 1 on (all loaded) only prefetches
+    if (i > 0) most_prefetches = std::max(most_prefetches, frame.stats.loads_issued);
+    fx.executor->run_pending();
+  }
+  for (const char* path : {"0", "3", "7"}) EXPECT_TRUE(fx.streaming->is_resident(fx.tree.node_at(path), 1)) << path;
+  for (const char* path : {"0/0", "3/5", "7/7"}) EXPECT_TRUE(fx.streaming->is_resident(fx.tree.node_at(path), 1)) << path;
+  EXPECT_LE(most_prefetches, 9u);  // one cut entry's neighbours at a time
+}
+
 TEST(Paging, ThreadPoolLoadsConvergeToTheReferenceCut) {
   SyntheticTree tree = make_full_octree(4);
   auto executor = std::make_shared<ThreadPoolExecutor>(2);
@@ -612,6 +633,9 @@ TEST(Open, RejectsMeaninglessOptions) {
   StreamingOptions sse;
   sse.target_sse_pixels = 0;
   EXPECT_EQ(open_with(sse), ErrorCode::usage);
+  StreamingOptions no_checks;
+  no_checks.prefetch_checks_per_frame = 0;
+  EXPECT_EQ(open_with(no_checks), ErrorCode::usage);
   EXPECT_EQ(StreamingTree::open(Manifest{}, tree.source, executor, {}).status().code(), ErrorCode::bad_input);
 }
 

@@ -40,6 +40,7 @@ bool NodeCache::install(std::uint32_t slot, std::shared_ptr<const NodeMesh> mesh
   Slot& s = slots_[slot];
   s.mesh = std::move(mesh);
   s.bytes = bytes;
+  s.triangles = static_cast<std::uint32_t>(s.mesh->triangle_count());
   s.state = SlotState::resident;
   s.in_use = false;
   s.released = false;
@@ -112,6 +113,7 @@ void NodeCache::reclaim(std::uint32_t slot) {
   free_bytes_ -= s.bytes;
   s.mesh.reset();
   s.bytes = 0;
+  s.triangles = 0;
   s.state = SlotState::absent;
   s.released = false;
   count_resident(slot, -1);

@@ -38,6 +38,8 @@ class NodeCache {
     return s.state == SlotState::resident && !s.in_use && s.released;
   }
   const std::shared_ptr<const NodeMesh>& mesh(std::uint32_t slot) const { return slots_[slot].mesh; }
+  // The resident mesh's triangle count, without touching the mesh's own memory.
+  std::uint32_t triangles(std::uint32_t slot) const { return slots_[slot].triangles; }
   // Resident slots in the subtree of `node` (internal index), the node itself included.
   std::uint32_t subtree_resident(std::uint32_t node) const { return subtree_resident_[node]; }
 
@@ -74,6 +76,7 @@ class NodeCache {
   struct Slot {
     std::shared_ptr<const NodeMesh> mesh;
     std::uint64_t bytes = 0;  // real size while resident
+    std::uint32_t triangles = 0;  // of the mesh while resident
     std::uint32_t prev = kNoSlot, next = kNoSlot;  // free list links
     std::uint32_t last_used = 0;
     SlotState state = SlotState::absent;

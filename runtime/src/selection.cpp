@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace octolod::runtime {
 
@@ -39,6 +40,7 @@ std::uint32_t choose_lod(const TreeLayout& tree, const LayoutNode& n, float true
   const float distance = true_distance * view.coarsening;
   if (view.mode == SelectionMode::screen_space_error) {
     const float allowed = distance * view.error_per_distance;
+    if (n.min_error > allowed) return n.child_count > 0 ? kRefine : n.lod_begin;
     for (std::uint32_t i = n.lod_count; i-- > 0;)
       if (tree.slot_error[n.lod_begin + i] <= allowed) return n.lod_begin + i;
     return n.child_count > 0 ? kRefine : n.lod_begin;  // a leaf draws its finest at worst
@@ -56,10 +58,20 @@ std::uint32_t choose_lod(const TreeLayout& tree, const LayoutNode& n, float true
 void select_cut(const TreeLayout& tree, const SelectionView& view, std::vector<StackEntry>& stack,
                 std::vector<WantedLod>& cut, SelectionCounters& counters) {
   cut.clear();
+  start_cut(stack);
+  continue_cut(tree, view, stack, cut, counters, std::numeric_limits<std::uint32_t>::max());
+}
+
+void start_cut(std::vector<StackEntry>& stack) {
   stack.clear();
   stack.push_back({0, 0x3Fu});
+}
+
+bool continue_cut(const TreeLayout& tree, const SelectionView& view, std::vector<StackEntry>& stack,
+                  std::vector<WantedLod>& cut, SelectionCounters& counters, std::uint32_t max_visits) {
   const auto& planes = view.frustum.planes;
-  while (!stack.empty()) {
+  for (std::uint32_t visits = 0; !stack.empty(); ++visits) {
+    if (visits == max_visits) return false;
     const StackEntry entry = stack.back();
     stack.pop_back();
     const LayoutNode& n = tree.nodes[entry.node];
@@ -90,12 +102,13 @@ void select_cut(const TreeLayout& tree, const SelectionView& view, std::vector<S
     const float distance = std::max(glm::length(delta), tree.min_distance);
     const std::uint32_t slot = choose_lod(tree, n, distance, view);
     if (slot != kRefine) {
-      cut.push_back({entry.node, slot, n.diagonal * view.pixels_per_unit / distance});
+      cut.push_back({entry.node, slot, 2.0f * glm::length(n.half) * view.pixels_per_unit / distance});
       continue;
     }
     for (std::uint32_t c = n.child_count; c-- > 0;)
       stack.push_back({tree.children[n.child_begin + c], mask});
   }
+  return true;
 }
 
 }  // namespace octolod::runtime

@@ -31,7 +31,7 @@ SelectionView make_selection_view(const Camera& camera, const StreamingOptions& 
 struct WantedLod {
   std::uint32_t node = 0;  // internal (preorder) index
   std::uint32_t slot = 0;  // TreeLayout slot
-  // Projected size of the node's box in pixels (diagonal·pixels_per_unit / distance): larger and
+  // Projected size of the node's box in pixels (|2·half|·pixels_per_unit / distance): larger and
   // nearer nodes load first.
   float priority = 0.0f;
 };
@@ -49,6 +49,15 @@ struct StackEntry {
 // Writes the cut to `cut` in preorder (increasing node index). `stack` is scratch.
 void select_cut(const TreeLayout& tree, const SelectionView& view, std::vector<StackEntry>& stack,
                 std::vector<WantedLod>& cut, SelectionCounters& counters);
+
+// The same traversal spread over several calls, so its cost per call is bounded: start_cut()
+// seeds `stack` with the root, then every continue_cut() visits at most `max_visits` more nodes
+// and appends the cut entries it finds to `cut` (which it does not clear), in preorder across the
+// calls. Returns true, with `stack` empty, once the whole tree has been traversed. `view` and the
+// tree must not change between the calls of one traversal.
+void start_cut(std::vector<StackEntry>& stack);
+bool continue_cut(const TreeLayout& tree, const SelectionView& view, std::vector<StackEntry>& stack,
+                  std::vector<WantedLod>& cut, SelectionCounters& counters, std::uint32_t max_visits);
 
 // Distance from `eye` to the box (0 inside), clamped to at least tree.min_distance.
 float distance_to_node(const TreeLayout& tree, std::uint32_t node, glm::vec3 eye);

@@ -38,6 +38,8 @@ Status validate(const StreamingOptions& o) {
   if (!(o.max_cut_fraction > 0.0 && o.max_cut_fraction <= 1.0))
     return usage_error("max_cut_fraction must be in (0, 1]");
   if (o.max_loads_in_flight == 0) return usage_error("max_loads_in_flight must be at least 1");
+  if (o.prefetch_checks_per_frame == 0 || o.prediction_visits_per_frame == 0)
+    return usage_error("prefetch_checks_per_frame and prediction_visits_per_frame must be at least 1");
   if (!(o.prediction_frames >= 0.0) || !std::isfinite(o.prediction_frames))
     return usage_error("prediction_frames must be a non-negative number of frames");
   if (o.mode == SelectionMode::distance) {
@@ -90,7 +92,9 @@ struct StreamingTree::Impl {
   bool substitute_ancestor(std::uint32_t node, std::uint32_t& covered_end);
   void request_nearest_ancestor(const WantedLod& wanted);
   void update_in_use();
+  void hand_out_draws(FrameStats& stats);
   void collect_prefetch(const SelectionView& view, const Camera& camera);
+  std::uint32_t consider_neighbours(const WantedLod& wanted);
   void consider_prefetch(std::uint32_t slot, float priority);
   void issue_loads(const SelectionView& view, const Camera& camera, FrameStats& stats);
   bool issue(std::uint32_t slot, std::uint32_t protect_from_frame, FrameStats& stats);
@@ -128,6 +132,11 @@ struct StreamingTree::Impl {
   // Per-frame scratch, reused so a steady frame allocates nothing.
   std::vector<StackEntry> stack;
   std::vector<WantedLod> cut, predicted_cut;
+  // Prefetch planning state carried across frames: the next cut entry whose neighbours are
+  // considered, and the predicted view's selection in progress (empty stack: none).
+  std::size_t neighbour_cursor = 0;
+  SelectionView predicted_view;
+  std::vector<StackEntry> predicted_stack;
   std::vector<Draw> draws;
   std::vector<std::uint32_t> in_use, previously_in_use;
   std::vector<Candidate> needed, prefetch;
@@ -137,6 +146,9 @@ struct StreamingTree::Impl {
   std::vector<std::uint32_t> old_pending, new_pending;
   std::vector<LoadCompletion> completions;
   FrameResult result;
+  std::vector<std::uint32_t> result_slots;  // slot of each of result.draws
+  std::vector<DrawItem> handed_out;         // the last frame's draws while the next are made
+  std::vector<std::uint32_t> handed_out_slots;
 };
 
 const FrameResult& StreamingTree::Impl::update(const Camera& camera) {
@@ -161,21 +173,7 @@ const FrameResult& StreamingTree::Impl::update(const Camera& camera) {
   update_in_use();
   issue_loads(view, camera, stats);
 
-  // hand out the frame
-  result.draws.clear();
-  for (const Draw& d : draws) {
-    const LayoutNode& n = tree.nodes[d.node];
-    DrawItem item;
-    item.node = n.manifest_index;
-    item.lod = d.slot - n.lod_begin;
-    item.depth = n.depth;
-    item.mesh = cache.mesh(d.slot);
-    item.is_fallback = d.fallback;
-    stats.drawn_triangles += item.mesh->triangle_count();
-    stats.fallbacks += d.fallback ? 1u : 0u;
-    result.draws.push_back(std::move(item));
-  }
-  stats.drawn_nodes = static_cast<std::uint32_t>(draws.size());
+  hand_out_draws(stats);
   stats.resident_bytes = cache.resident_bytes();
   stats.reserved_bytes = cache.reserved_bytes();
   stats.loads_in_flight = requested;
@@ -185,6 +183,34 @@ const FrameResult& StreamingTree::Impl::update(const Camera& camera) {
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   stats.selection_cpu_ms = thread_cpu_ms() - start_cpu_ms;
   return result;
+}
+
+// Fills result.draws from `draws`. A mesh the last frame handed out too moves over from the old
+// list (both are in increasing slot order) instead of being copied: a shared_ptr copy and the old
+// copy's release would write to every drawn mesh's control block, a cache miss each.
+void StreamingTree::Impl::hand_out_draws(FrameStats& stats) {
+  handed_out.swap(result.draws);
+  handed_out_slots.swap(result_slots);
+  result.draws.clear();
+  result_slots.clear();
+  std::size_t old = 0;
+  for (const Draw& d : draws) {
+    const LayoutNode& n = tree.nodes[d.node];
+    DrawItem item;
+    item.node = n.manifest_index;
+    item.lod = d.slot - n.lod_begin;
+    item.depth = n.depth;
+    while (old < handed_out_slots.size() && handed_out_slots[old] < d.slot) ++old;
+    if (old < handed_out_slots.size() && handed_out_slots[old] == d.slot) item.mesh = std::move(handed_out[old].mesh);
+    else item.mesh = cache.mesh(d.slot);
+    item.is_fallback = d.fallback;
+    stats.drawn_triangles += cache.triangles(d.slot);
+    stats.fallbacks += d.fallback ? 1u : 0u;
+    result.draws.push_back(std::move(item));
+    result_slots.push_back(d.slot);
+  }
+  handed_out.clear();
+  stats.drawn_nodes = static_cast<std::uint32_t>(draws.size());
 }
 
 // Selects the cut at the target, relaxed by a factor when it would not fit max_cut_fraction of
@@ -362,39 +388,63 @@ void StreamingTree::Impl::update_in_use() {
 }
 
 // Prefetch (El-Sana & Chiang 2000; ARCHITECTURE.md): the LOD one step finer and one step coarser
-// than every wanted one (the next LOD of the node, else its children's coarsest / its parent's
-// finest), and the cut seen from where the camera will be if it keeps its velocity.
+// than wanted ones (the next LOD of the node, else its children's coarsest / its parent's
+// finest), and the cut seen from where the camera will be if it keeps its velocity. Both are
+// planned a bounded piece per frame (StreamingOptions::prefetch_cut_entries_per_frame,
+// prediction_visits_per_frame): a whole second selection every frame would cost as much as the
+// frame's own.
 void StreamingTree::Impl::collect_prefetch(const SelectionView& view, const Camera& camera) {
-  for (const WantedLod& w : cut) {
-    const LayoutNode& n = tree.nodes[w.node];
-    if (w.slot > n.lod_begin) {
-      consider_prefetch(w.slot - 1, w.priority);
-    } else {
-      for (std::uint32_t i = 0; i < n.child_count; ++i) {
-        const std::uint32_t child = tree.children[n.child_begin + i];
-        if (tree.nodes[child].lod_count > 0) consider_prefetch(tree.slot_end(child) - 1, w.priority);
-      }
-    }
-    if (w.slot + 1 < tree.slot_end(w.node)) {
-      consider_prefetch(w.slot + 1, w.priority);
-    } else if (n.parent >= 0) {
-      const LayoutNode& parent = tree.nodes[static_cast<std::size_t>(n.parent)];
-      if (parent.lod_count > 0) consider_prefetch(parent.lod_begin, w.priority);
-    }
+  if (neighbour_cursor >= cut.size()) neighbour_cursor = 0;
+  std::uint32_t checks = 0;
+  for (std::size_t k = 0; k < cut.size() && checks < options.prefetch_checks_per_frame; ++k) {
+    checks += consider_neighbours(cut[neighbour_cursor]);
+    if (++neighbour_cursor == cut.size()) neighbour_cursor = 0;
   }
 
-  if (!has_previous_eye || options.prediction_frames <= 0.0) return;
-  const glm::vec3 ahead =
-      (camera.position - previous_eye) * static_cast<float>(options.prediction_frames);
-  if (!(glm::length(ahead) > tree.min_distance)) return;
-  Camera predicted = camera;
-  predicted.position += ahead;
-  predicted.view = camera.view * glm::translate(glm::mat4(1.0f), -ahead);
+  if (predicted_stack.empty()) {
+    if (!has_previous_eye || options.prediction_frames <= 0.0) return;
+    const glm::vec3 ahead =
+        (camera.position - previous_eye) * static_cast<float>(options.prediction_frames);
+    if (!(glm::length(ahead) > tree.min_distance)) return;
+    Camera predicted = camera;
+    predicted.position += ahead;
+    predicted.view = camera.view * glm::translate(glm::mat4(1.0f), -ahead);
+    predicted_view = make_selection_view(predicted, options);
+    predicted_view.coarsening = view.coarsening;
+    start_cut(predicted_stack);
+  }
+  predicted_cut.clear();
   SelectionCounters ignored;
-  SelectionView predicted_view = make_selection_view(predicted, options);
-  predicted_view.coarsening = view.coarsening;
-  select_cut(tree, predicted_view, stack, predicted_cut, ignored);
+  continue_cut(tree, predicted_view, predicted_stack, predicted_cut, ignored,
+               options.prediction_visits_per_frame);
   for (const WantedLod& w : predicted_cut) consider_prefetch(w.slot, w.priority);
+}
+
+// Returns how many slots it checked.
+std::uint32_t StreamingTree::Impl::consider_neighbours(const WantedLod& w) {
+  const LayoutNode& n = tree.nodes[w.node];
+  std::uint32_t checks = 0;
+  if (w.slot > n.lod_begin) {
+    consider_prefetch(w.slot - 1, w.priority);
+    ++checks;
+  } else {
+    for (std::uint32_t i = n.child_begin; i < n.child_begin + n.child_count; ++i) {
+      if (tree.child_coarsest_slot[i] == kNoSlot) continue;
+      consider_prefetch(tree.child_coarsest_slot[i], w.priority);
+      ++checks;
+    }
+  }
+  if (w.slot + 1 < tree.slot_end(w.node)) {
+    consider_prefetch(w.slot + 1, w.priority);
+    ++checks;
+  } else if (n.parent >= 0) {
+    const LayoutNode& parent = tree.nodes[static_cast<std::size_t>(n.parent)];
+    if (parent.lod_count > 0) {
+      consider_prefetch(parent.lod_begin, w.priority);
+      ++checks;
+    }
+  }
+  return checks;
 }
 
 void StreamingTree::Impl::consider_prefetch(std::uint32_t slot, float priority) {

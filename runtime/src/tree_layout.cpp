@@ -69,7 +69,6 @@ Result<TreeLayout> build_tree_layout(const Manifest& manifest) {
       const glm::vec3 hi(box[i].max[0], box[i].max[1], box[i].max[2]);
       n.center = 0.5f * (lo + hi);
       n.half = 0.5f * (hi - lo);
-      n.diagonal = glm::length(hi - lo);
     }
     n.child_begin = static_cast<std::uint32_t>(t.children.size());
     for (std::int32_t c : info.children) {
@@ -81,7 +80,9 @@ Result<TreeLayout> build_tree_layout(const Manifest& manifest) {
     n.child_count = static_cast<std::uint32_t>(t.children.size()) - n.child_begin;
     n.lod_begin = static_cast<std::uint32_t>(t.slot_error.size());
     n.lod_count = static_cast<std::uint32_t>(info.lods.size());
+    n.min_error = info.lods.empty() ? 0.0f : static_cast<float>(info.lods[0].error);
     for (const LodInfo& lod : info.lods) {
+      n.min_error = std::min(n.min_error, static_cast<float>(lod.error));
       t.slot_error.push_back(static_cast<float>(lod.error));
       t.slot_bytes.push_back(decoded_bytes(lod, manifest.layout));
       t.slot_triangles.push_back(lod.triangles);
@@ -89,7 +90,10 @@ Result<TreeLayout> build_tree_layout(const Manifest& manifest) {
       t.slot_file.push_back(lod.file);
     }
   }
-  t.min_distance = std::max(1e-6f * t.nodes[0].diagonal, 1e-12f);
+  t.child_coarsest_slot.reserve(t.children.size());
+  for (std::uint32_t child : t.children)
+    t.child_coarsest_slot.push_back(t.nodes[child].lod_count > 0 ? t.slot_end(child) - 1 : kNoSlot);
+  t.min_distance = std::max(2e-6f * glm::length(t.nodes[0].half), 1e-12f);
   return t;
 }
 

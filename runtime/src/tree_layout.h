@@ -22,7 +22,9 @@ struct LayoutNode {
   // contain their children's, so culling and distances use the union.
   glm::vec3 center{0.0f};
   glm::vec3 half{0.0f};
-  float diagonal = 0.0f;             // |2·half|, model units
+  // Smallest error of the node's LODs (model units; unused without LODs): selection refines a
+  // node whose every LOD is too coarse without reading the per-slot errors.
+  float min_error = 0.0f;
   std::uint32_t subtree_end = 0;     // one past the last node of this subtree (preorder)
   std::int32_t parent = -1;          // internal index, -1 for the root
   std::uint32_t child_begin = 0;     // into TreeLayout::children
@@ -36,6 +38,9 @@ struct LayoutNode {
 struct TreeLayout {
   std::vector<LayoutNode> nodes;        // nodes[0] is the root
   std::vector<std::uint32_t> children;  // internal indices, grouped by parent, octant order
+  // Parallel to `children`: each child's coarsest slot (kNoSlot when it has no LOD), so a
+  // parent's children's slots are read from one place instead of from every child's node.
+  std::vector<std::uint32_t> child_coarsest_slot;
   // Per slot (node LOD), indexed by LayoutNode::lod_begin + lod.
   std::vector<float> slot_error;             // model units
   std::vector<std::uint64_t> slot_bytes;     // expected decoded NodeMesh bytes

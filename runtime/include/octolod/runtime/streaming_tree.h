@@ -66,6 +66,15 @@ struct StreamingOptions {
   bool prefetch = true;
   // How many frames ahead the camera motion is extrapolated for prefetching.
   double prediction_frames = 15.0;
+  // Prefetch planning is spread over frames so that it adds a bounded cost to every update()
+  // instead of a second selection pass. Each frame checks at most this many neighbour LODs of the
+  // cut (round robin over the cut: a cut of n entries, each with up to 10 neighbours, is covered
+  // every ~10·n / prefetch_checks_per_frame frames) ...
+  std::uint32_t prefetch_checks_per_frame = 64;
+  // ... and visits at most this many nodes of the predicted view's selection, which resumes where
+  // it stopped; a new prediction starts from the camera of the frame after the last one finished.
+  // Larger reacts sooner to the camera's motion and costs more per frame.
+  std::uint32_t prediction_visits_per_frame = 128;
   // Prefetches never reclaim a second-chance entry used within this many frames.
   std::uint32_t prefetch_protect_frames = 30;
   // The selected cut is kept within this fraction of max_resident_bytes: when the cut at the
@@ -123,7 +132,10 @@ struct FrameStats {
   // update() never blocks on a load, so this is always 0; a frame with cache_misses > 0 drew
   // fallbacks instead of waiting.
   std::uint32_t waiting_on_io = 0;
-  double selection_ms = 0;  // wall time of the whole update() call
+  // Wall time of the whole update() call in milliseconds: installing completed loads, selecting
+  // the cut, substituting resident LODs, and planning loads and prefetches (what `octolod walk`
+  // and bench/selection_bench report as selection_ms).
+  double selection_ms = 0;
   // CPU time the calling thread spent in update(): selection_ms without the time the thread was
   // preempted (on a busy machine the wall time's tail is the scheduler's, not the runtime's).
   double selection_cpu_ms = 0;
