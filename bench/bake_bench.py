@@ -11,6 +11,8 @@ footprint of shared libraries), for the full bake and for `--method none` (soup 
 leaf files only), then the seed's Table 5.1: leaves and build time against max-tris 1000..6000 at
 depths 5 and 8 (octree only by default, --table-method grid for the full bake).
 
+Also user and system CPU seconds and the MiB the process wrote (the kernel's count).
+
   bench/bake_bench.py --cli build/cli/octolod [--work /tmp/bake-bench] [--sizes 1M,10M]
                       [--memory 16M,64M,256M] [--threads 2] [--methods grid,none]
                       [--table-size 1M] [--table-method none] [--no-table] [--markdown]
@@ -45,6 +47,10 @@ def run_bake(cli, ply, out, work, memory, threads, max_tris=2000, max_depth=10, 
     seconds = sum(v * 60 ** (len(parts) - 1 - i) for i, v in enumerate(parts))
     report["process_peak_rss_mib"] = rss_kib / 1024.0
     report["process_seconds"] = seconds
+    report["process_user_seconds"] = float(re.search(r"User time \(seconds\): ([\d.]+)", p.stderr).group(1))
+    report["process_sys_seconds"] = float(re.search(r"System time \(seconds\): ([\d.]+)", p.stderr).group(1))
+    # "File system outputs" counts 512-byte blocks written.
+    report["process_written_mib"] = int(re.search(r"File system outputs: (\d+)", p.stderr).group(1)) / 2048.0
     shutil.rmtree(out, ignore_errors=True)
     return report
 
@@ -90,11 +96,12 @@ def main():
         line = sep.join(str(c) for c in cells)
         print(("| " + " | ".join(str(c) for c in cells) + " |") if args.markdown else line)
 
+    print("load average at start: %.2f %.2f %.2f" % os.getloadavg())
     idle = idle_rss_mib(args.cli)
     print("idle `octolod --help` peak RSS: %.1f MiB" % idle)
     header = ["triangles", "method", "memory", "soup path", "soup s", "octree sort s",
               "octree stream s", "lods after stream s", "node work s", "total s", "wall s",
-              "M tri/s", "nodes", "LODs", "root coarsest tris", "sort runs", "LOD rereads",
+              "user s", "sys s", "written MiB", "M tri/s", "nodes", "LODs", "root coarsest tris", "sort runs", "LOD rereads",
               "peak RSS MiB", "RSS - idle MiB", "RSS before manifest - idle MiB",
               "budget+24 MiB ok"]
     row(header)
@@ -112,6 +119,8 @@ def main():
                      "%.2f" % s["soup"], "%.2f" % s["octree.sort"], "%.2f" % s["octree.stream"],
                      "%.2f" % s.get("lods", 0), "%.2f" % st.get("node_work_seconds", 0),
                      "%.2f" % s["total"], "%.2f" % r["process_seconds"],
+                     "%.2f" % r["process_user_seconds"], "%.2f" % r["process_sys_seconds"],
+                     "%.0f" % r["process_written_mib"],
                      "%.2f" % (r["triangles"] / s["total"] / 1e6), r["nodes"], r["lods"],
                      r["root_coarsest_triangles"], r["octree_sort_runs"],
                      int(st.get("lod_rereads", 0)), "%.1f" % rss, "%.1f" % (rss - idle),

@@ -302,6 +302,9 @@ TEST_F(BakeTest, TinyBudgetOutOfCoreGivesTheSameTreeAsALargeBudget) {
   EXPECT_TRUE(rl->soup_in_core);
   EXPECT_GT(rs->sort_runs, 1u);
   EXPECT_EQ(rl->sort_runs, 0u);
+  // Out of core the soup goes straight into the octree sort; in core through a soup file.
+  EXPECT_EQ(rs->manifest.stats.at("soup_streamed_to_sort"), 1.0);
+  EXPECT_EQ(rl->manifest.stats.at("soup_streamed_to_sort"), 0.0);
   // The small budget keeps few children's LODs in memory: parents re-read the others.
   EXPECT_GT(rs->manifest.stats.at("lod_rereads"), 0.0);
   EXPECT_EQ(rl->manifest.stats.at("lod_rereads"), 0.0);

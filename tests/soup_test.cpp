@@ -252,11 +252,36 @@ TEST(Soup, SinkReceivesTheSoupInsteadOfAFile) {
       received.append(reinterpret_cast<const char*>(records.data()), records.size());
       return Status{};
     };
+    // Told once, before any record, what the stage leaves of the budget: out of core about
+    // half (a consumer can sort beside it), in core about one io buffer.
+    int starts = 0;
+    options.sink_start = [&](const SoupSinkStart& start) {
+      ++starts;
+      EXPECT_TRUE(received.empty());
+      EXPECT_EQ(start.triangle_count, mesh.triangles.size() / 3);
+      EXPECT_EQ(start.in_core, !force);
+      if (force) {
+        EXPECT_GE(start.free_budget_bytes, options.memory_budget_bytes / 4);
+      } else {
+        EXPECT_LT(start.free_budget_bytes, options.memory_budget_bytes / 4);
+      }
+      return Status{};
+    };
     auto r = build_soup(dir.file("grid.ply"), options);
     ASSERT_TRUE(r.ok()) << r.status().message();
+    EXPECT_EQ(starts, 1);
     EXPECT_TRUE(r->soup.empty());
     EXPECT_TRUE(received == expected);
     EXPECT_EQ(dir.work_file_count(), 0u);
+    // A sink_start's error ends the stage before any record, and cleans up.
+    options.sink_start = [](const SoupSinkStart&) { return bad_input_error("no room"); };
+    received.clear();
+    auto refused = build_soup(dir.file("grid.ply"), options);
+    ASSERT_FALSE(refused.ok());
+    EXPECT_EQ(refused.status().message(), "no room");
+    EXPECT_TRUE(received.empty());
+    EXPECT_EQ(dir.work_file_count(), 0u);
+    options.sink_start = nullptr;
     // A sink's error ends the stage with it, and cleans up.
     options.sink = [](std::span<const std::byte>) { return bad_input_error("sink says no"); };
     auto failed = build_soup(dir.file("grid.ply"), options);

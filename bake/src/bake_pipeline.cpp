@@ -93,44 +93,77 @@ Result<OctreeBudget> divide_octree_budget(const BakeOptions& options, VertexLayo
   return b;
 }
 
-struct OctreeResult {
-  RootCube cube;
-  std::vector<OctreeNode> nodes;
-  std::vector<std::optional<NodeLods>> lods;  // by node index
-  LodTreeStats lod_stats;
-  SortStats sort;
-  double sort_seconds = 0;    // run formation (reading the soup into the sorter)
-  double stream_seconds = 0;  // merge + tree decision, node work overlapping
-  double lod_seconds = 0;     // the node work left when the stream ended (wall)
-};
+// The soup's way into the octree sort (SoupOptions::sink). When the soup stage leaves room
+// for a sorter beside it (its out-of-core path keeps about half the budget free in its last
+// pass), the records go straight into that sorter's run buffer and the soup never touches the
+// disk. Otherwise (the in-core path holds the whole budget) they go to a soup file, read into a
+// sorter with the full sort budget once the soup stage has freed its memory.
+class OctreeInput {
+ public:
+  OctreeInput(const BakeOptions& options, fs::path work, unsigned threads)
+      : options_(options), work_(std::move(work)), threads_(threads) {}
 
-// Sorts the soup by centroid Morton code and streams it through the OctreeBuilder, leaves
-// written into `root` (seed 3.4, 4.3). Removes the soup file once the sorter holds it all.
-Result<OctreeResult> build_octree(const BakeOptions& options, SoupResult& soup,
-                                  const fs::path& work, const fs::path& root, unsigned threads) {
-  OctreeResult result;
-  result.cube = RootCube::around(soup.bounds);
-  const MortonQuantizer quantizer(result.cube, options.max_depth);
-  const std::size_t record_bytes = soup_record_bytes(soup.layout);
-  const unsigned workers = threads > 1 ? threads - 1 : 0;
-  auto budget = divide_octree_budget(options, soup.layout, workers);
-  if (!budget.ok()) return budget.status();
-  auto progress = [&](std::string_view stage, std::uint64_t done) {
-    if (options.progress) options.progress(stage, done, soup.triangle_count);
-  };
+  // SoupOptions::sink_start: the cube, the budget's division, and where the records go.
+  Status start(const SoupSinkStart& soup) {
+    layout_ = soup.layout;
+    cube_ = RootCube::around(soup.bounds);
+    key_ = centroid_morton_key(MortonQuantizer(cube_, options_.max_depth), layout_);
+    auto budget = divide_octree_budget(options_, layout_, workers());
+    if (!budget.ok()) return budget.status();
+    budget_ = budget.value();
+    const std::size_t record_bytes = soup_record_bytes(layout_);
+    if (soup.free_budget_bytes >= budget_.sort_bytes / 4) {
+      auto sorter = create_sorter(std::min(soup.free_budget_bytes, budget_.sort_bytes));
+      if (!sorter.ok()) return sorter.status();
+      sorter_ = std::move(sorter).value();
+      return {};
+    }
+    file_ = make_temp_file(work_, "soup");
+    auto writer = RecordWriter::create(file_.path(), record_bytes, budget_.io_bytes);
+    if (!writer.ok()) return writer.status();
+    writer_.emplace(std::move(writer).value());
+    return {};
+  }
 
-  // sort: the soup file into the sorter's run buffer
-  auto start = Clock::now();
-  SortOptions sort_options;
-  sort_options.memory_budget_bytes = budget->sort_bytes;
-  sort_options.work_dir = work;
-  sort_options.threads = threads;
-  const SortKeyFn key = centroid_morton_key(quantizer, soup.layout);
-  auto created = RecordSorter::create(record_bytes, key, sort_options);
-  if (!created.ok()) return created.status();
-  RecordSorter& sorter = *created.value();
-  {
-    auto reader = RecordReader::open(soup.soup.path(), record_bytes, budget->io_bytes);
+  // SoupOptions::sink.
+  Status push(std::span<const std::byte> records) {
+    if (cleanup_signal_received()) return interrupted();
+    if (sorter_) return sorter_->push(records);
+    return writer_->append(records.data(), records.size() / soup_record_bytes(layout_));
+  }
+
+  // After the soup stage: the sorter, holding every record and finished (run formation done).
+  // `progress(done)` counts the records read back from the soup file, if one was written.
+  Result<RecordSorter*> finish(const std::function<void(std::uint64_t)>& progress) {
+    if (writer_) OCTOLOD_RETURN_IF_ERROR(read_back(progress));
+    OCTOLOD_RETURN_IF_ERROR(sorter_->finish());
+    return sorter_.get();
+  }
+
+  const RootCube& cube() const { return cube_; }
+  VertexLayout layout() const { return layout_; }
+  const SortKeyFn& key() const { return key_; }
+  const OctreeBudget& budget() const { return budget_; }
+  unsigned workers() const { return threads_ > 1 ? threads_ - 1 : 0; }
+  bool streamed() const { return file_.empty(); }  // no soup file was written
+
+ private:
+  Result<std::unique_ptr<RecordSorter>> create_sorter(std::uint64_t budget) const {
+    SortOptions sort_options;
+    sort_options.memory_budget_bytes = budget;
+    sort_options.work_dir = work_;
+    sort_options.threads = threads_;
+    return RecordSorter::create(soup_record_bytes(layout_), key_, sort_options);
+  }
+
+  Status read_back(const std::function<void(std::uint64_t)>& progress) {
+    OCTOLOD_RETURN_IF_ERROR(writer_->finish());
+    writer_.reset();
+    auto sorter = create_sorter(budget_.sort_bytes);
+    if (!sorter.ok()) return sorter.status();
+    sorter_ = std::move(sorter).value();
+    const std::size_t record_bytes = soup_record_bytes(layout_);
+    auto reader = RecordReader::open(file_.path(), record_bytes, budget_.io_bytes);
     if (!reader.ok()) return reader.status();
     std::uint64_t done = 0;
     for (;;) {
@@ -138,13 +171,59 @@ Result<OctreeResult> build_octree(const BakeOptions& options, SoupResult& soup,
       auto block = reader->read();
       if (!block.ok()) return block.status();
       if (block->empty()) break;
-      OCTOLOD_RETURN_IF_ERROR(sorter.push(block.value()));
+      OCTOLOD_RETURN_IF_ERROR(sorter_->push(block.value()));
       done += block->size() / record_bytes;
-      progress("sort", done);
+      progress(done);
     }
+    file_.remove();  // every record is in the sorter's runs now: free the disk
+    return {};
   }
-  soup.soup.remove();  // every record is in the sorter's runs now: free the disk
-  OCTOLOD_RETURN_IF_ERROR(sorter.finish());
+
+  const BakeOptions& options_;
+  fs::path work_;
+  unsigned threads_;
+  VertexLayout layout_;
+  RootCube cube_;
+  SortKeyFn key_;
+  OctreeBudget budget_;
+  std::unique_ptr<RecordSorter> sorter_;
+  TempFile file_;
+  std::optional<RecordWriter> writer_;
+};
+
+struct OctreeResult {
+  RootCube cube;
+  std::vector<OctreeNode> nodes;
+  std::vector<std::optional<NodeLods>> lods;  // by node index
+  LodTreeStats lod_stats;
+  SortStats sort;
+  bool soup_streamed = false; // the soup went straight into the sorter, no soup file
+  double sort_seconds = 0;    // run formation left after the soup stage (reading the soup file
+                              // back when one was written, the last run)
+  double stream_seconds = 0;  // merge + tree decision, node work overlapping
+  double lod_seconds = 0;     // the node work left when the stream ended (wall)
+};
+
+// Streams the Morton-sorted soup through the OctreeBuilder, leaves written into `root` (seed
+// 3.4, 4.3).
+Result<OctreeResult> build_octree(const BakeOptions& options, const SoupResult& soup,
+                                  OctreeInput& input, const fs::path& root) {
+  OctreeResult result;
+  result.cube = input.cube();
+  result.soup_streamed = input.streamed();
+  const std::size_t record_bytes = soup_record_bytes(soup.layout);
+  const unsigned workers = input.workers();
+  const OctreeBudget& budget = input.budget();
+  auto progress = [&](std::string_view stage, std::uint64_t done) {
+    if (options.progress) options.progress(stage, done, soup.triangle_count);
+  };
+
+  // sort: what run formation is left
+  auto start = Clock::now();
+  auto finished = input.finish([&](std::uint64_t done) { progress("sort", done); });
+  if (!finished.ok()) return finished.status();
+  RecordSorter& sorter = *finished.value();
+  const SortKeyFn& key = input.key();
   result.sort_seconds = seconds_since(start);
 
   // octree: one pass over the sorted stream decides the tree and hands out the leaves, whose
@@ -157,8 +236,8 @@ Result<OctreeResult> build_octree(const BakeOptions& options, SoupResult& soup,
   lod_options.build_lods = options.lods;
   lod_options.lod.method = options.method;
   lod_options.workers = workers;
-  lod_options.queue_bytes = budget->queue_bytes;
-  lod_options.keep_bytes = budget->keep_bytes;
+  lod_options.queue_bytes = budget.queue_bytes;
+  lod_options.keep_bytes = budget.keep_bytes;
   LodTreeBuilder lod_tree(lod_options);
   OctreeBuilder* builder_ptr = nullptr;
   OctreeBuilder builder(options.max_tris, options.max_depth, record_bytes,
@@ -297,14 +376,19 @@ Result<BakeReport> run_bake(const BakeOptions& options) {
     soup_options.order = SoupOrder::by_last_corner;
     soup_options.force_out_of_core = options.force_out_of_core;
     soup_options.progress = options.progress;
+    OctreeInput octree_input(options, work->path(), threads);
+    soup_options.sink_start = [&](const SoupSinkStart& soup_start) {
+      return octree_input.start(soup_start);
+    };
+    soup_options.sink = [&](std::span<const std::byte> records) {
+      return octree_input.push(records);
+    };
     auto soup = build_soup(options.input, soup_options);
     if (!soup.ok()) return soup.status();
     if (cleanup_signal_received()) return interrupted();
-    if (soup->triangle_count >= (std::uint64_t{1} << 32))
-      return unsupported_error(options.input.string() + ": 2^32 triangles or more");
 
     // octree
-    auto octree = build_octree(options, soup.value(), work->path(), staging->path(), threads);
+    auto octree = build_octree(options, soup.value(), octree_input, staging->path());
     if (!octree.ok()) return octree.status();
 
     // manifest
@@ -325,6 +409,7 @@ Result<BakeReport> run_bake(const BakeOptions& options) {
     manifest.stats["soup_in_core"] = soup->in_core ? 1 : 0;
     manifest.stats["octree_sort_runs"] = static_cast<double>(octree->sort.runs);
     manifest.stats["octree_sort_merge_passes"] = octree->sort.merge_passes;
+    manifest.stats["soup_streamed_to_sort"] = octree->soup_streamed ? 1 : 0;
   }
   work->remove();
 

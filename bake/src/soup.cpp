@@ -156,6 +156,22 @@ class SoupBuilder {
     if (options_.progress) options_.progress(stage, std::min(done, total), total);
   }
 
+  // The soup's output, opened once the stage's other buffers hold `bytes_in_use`; tells the
+  // caller's sink_start what the stage leaves of the budget.
+  Result<std::unique_ptr<SoupOutput>> open_output(bool in_core, std::uint64_t bytes_in_use) {
+    if (options_.sink && options_.sink_start) {
+      SoupSinkStart start;
+      start.layout = layout_;
+      start.triangle_count = result_.triangle_count;
+      start.bounds = result_.bounds;
+      start.in_core = in_core;
+      start.free_budget_bytes =
+          options_.memory_budget_bytes - std::min(bytes_in_use, options_.memory_budget_bytes);
+      OCTOLOD_RETURN_IF_ERROR(options_.sink_start(start));
+    }
+    return SoupOutput::open(options_, layout_, io_, soup_file_);
+  }
+
   // Runs the split into `sinks` and records the split's wall time and the sort time inside it.
   Status split(SplitSinks sinks, const RecordSorter& sorter) {
     const auto start = std::chrono::steady_clock::now();
@@ -204,7 +220,8 @@ class SoupBuilder {
     OCTOLOD_RETURN_IF_ERROR(triangles.finish());
     progress("dereference", 0, result_.triangle_count);
 
-    auto soup = SoupOutput::open(options_, layout_, io_, soup_file_);
+    // In use while the soup is written: the vertex array, the sort, the output batch.
+    auto soup = open_output(true, vertex_array_bytes + sort_budget + io_);
     if (!soup.ok()) return soup.status();
     ProgressOutput out(*soup.value(), [this](std::uint64_t done) {
       progress("dereference", done, result_.triangle_count);
@@ -271,7 +288,8 @@ class SoupBuilder {
         next = std::move(created).value();
         sorter_output = std::make_unique<SorterOutput>(*next);
       } else {
-        auto opened = SoupOutput::open(options_, layout_, io_, soup_file_);
+        // In use: the merging sort, the vertex file reader, the output batch.
+        auto opened = open_output(false, sort_budget + 2 * io_);
         if (!opened.ok()) return opened.status();
         soup = std::move(opened).value();
       }
@@ -291,7 +309,7 @@ class SoupBuilder {
     }
     vertex_file.remove();
     if (current) {  // SoupOrder::by_triangle: the soup sorted by triangle id
-      auto opened = SoupOutput::open(options_, layout_, io_, soup_file_);
+      auto opened = open_output(false, sort_budget + io_);  // the merging sort, the batch
       if (!opened.ok()) return opened.status();
       soup = std::move(opened).value();
       const std::size_t record_bytes = soup_record_bytes(layout_);

@@ -3,10 +3,11 @@
 //
 //   soup      the PLY becomes one self-contained record per triangle (octolod/bake/soup.h)
 //   octree    the soup is sorted by the Morton code of each triangle's centroid in the model's
-//             bounding cube (external merge sort), and one streaming pass over the sorted
-//             records decides the tree (a node splits while it holds more than max_tris
-//             triangles and is shallower than max_depth) and hands every leaf its contiguous
-//             run of triangles
+//             bounding cube (external merge sort; when the soup stage runs out of core its
+//             records go straight into this sort's runs, no soup file), and one streaming
+//             pass over the sorted records decides the tree (a node splits while it holds
+//             more than max_tris triangles and is shallower than max_depth) and hands every
+//             leaf its contiguous run of triangles
 //   lods      meanwhile, on worker threads, heaviest ready node first: each leaf is indexed
 //             (exact vertex dedup) into its LOD 0 (the original triangles, error 0) and a chain
 //             of simplifications (simplify.h); every internal node, once its children are done,

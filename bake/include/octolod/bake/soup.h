@@ -84,6 +84,18 @@ enum class SoupOrder {
 using SoupProgressFn =
     std::function<void(std::string_view stage, std::uint64_t done, std::uint64_t total)>;
 
+// What SoupOptions::sink_start learns before the first record reaches the sink.
+struct SoupSinkStart {
+  VertexLayout layout;
+  std::uint64_t triangle_count = 0;  // records the sink will receive
+  Bounds bounds;                     // of every vertex (as SoupResult::bounds), model units
+  bool in_core = false;              // which path feeds the sink
+  // Bytes of memory_budget_bytes the stage leaves unused while it feeds the sink: what the
+  // sink's consumer may hold meanwhile, the two together within the budget. The out-of-core
+  // path leaves about half the budget; the in-core path about one io buffer (1 MiB at most).
+  std::uint64_t free_budget_bytes = 0;
+};
+
 struct SoupOptions {
   // Cap on all buffers of the stage together: PLY reader, file buffers, sorts, and in core the
   // vertex array. Must be at least kMinSoupBudget. Larger budgets mean fewer sorted runs and,
@@ -103,6 +115,9 @@ struct SoupOptions {
   // its own sort without the soup ever touching the disk. SoupResult::soup is then empty. An
   // error the sink returns ends build_soup with that error. Called from the calling thread.
   std::function<Status(std::span<const std::byte> records)> sink;
+  // Optional, with `sink`: called once after the split, before the first record reaches `sink`
+  // (also when there are none). An error it returns ends build_soup with that error.
+  std::function<Status(const SoupSinkStart& start)> sink_start;
 };
 
 inline constexpr std::uint64_t kMinSoupBudget = 256 * 1024;
