@@ -69,6 +69,17 @@ double hue_degrees(double r, double g, double b) {
   return h < 0 ? h + 360.0 : h;
 }
 
+// Hues of the picture's non-background pixels, row by row.
+std::vector<double> lit_hues(const Picture& picture) {
+  std::vector<double> hues;
+  for (int y = 0; y < picture.height; ++y)
+    for (int x = 0; x < picture.width; ++x) {
+      const std::uint32_t p = picture.get(x, y);
+      if (p != kBackground) hues.push_back(hue_degrees((p >> 16) & 0xFF, (p >> 8) & 0xFF, p & 0xFF));
+    }
+  return hues;
+}
+
 double hue_distance(double a, double b) {
   const double d = std::abs(a - b);
   return std::min(d, 360.0 - d);
@@ -117,13 +128,13 @@ class RenderCli : public ::testing::Test {
 
 TEST_F(RenderCli, SyntheticTreeShowsOneTintPerDetailLevelAndNoOther) {
   // The 3-level synthetic tree ([0,64]^3, 2 LODs per node, no vertex colours) seen by the default
-  // camera at 500 px: near leaves draw their original triangles (level 0), farther nodes coarser
+  // camera at 500 px with a 2 px target: near leaves draw their original triangles (level 0), farther nodes coarser
   // LODs, so the settled cut spans several detail levels.
   const auto dir = scratch_dir("synthetic");
   const runtime::testing::SyntheticTree tree = runtime::testing::make_full_octree(3);
   runtime::testing::write_tree(tree, dir / "tree");
   const auto png = dir / "frame.png";
-  const CliRun run = octolod("--json render " + (dir / "tree").string() + " --width 640 --height 500 -o " + png.string(), dir);
+  const CliRun run = octolod("--json render " + (dir / "tree").string() + " --width 640 --height 500 --sse 2 -o " + png.string(), dir);
   ASSERT_EQ(run.exit_code, 0);
   ASSERT_TRUE(run.json.is_object());
   EXPECT_TRUE(run.json.at("complete").get<bool>());
@@ -147,23 +158,20 @@ TEST_F(RenderCli, SyntheticTreeShowsOneTintPerDetailLevelAndNoOther) {
   ASSERT_EQ(picture.width, 640);
   ASSERT_EQ(picture.height, 500);
   std::map<std::uint32_t, int> pixels_per_level;
-  int lit = 0, unexplained = 0;
-  for (int y = 0; y < picture.height; ++y)
-    for (int x = 0; x < picture.width; ++x) {
-      const std::uint32_t p = picture.get(x, y);
-      if (p == kBackground) continue;
-      ++lit;
-      const double hue = hue_degrees((p >> 16) & 0xFF, (p >> 8) & 0xFF, p & 0xFF);
-      std::uint32_t best = 0;
-      double best_distance = 1e9;
-      for (std::uint32_t level = 0; level < 8; ++level)
-        if (hue_distance(hue, level_hue(level)) < best_distance) {
-          best_distance = hue_distance(hue, level_hue(level));
-          best = level;
-        }
-      if (best_distance > 10.0 || levels.count(best) == 0) ++unexplained;
-      else ++pixels_per_level[best];
-    }
+  const std::vector<double> hues = lit_hues(picture);
+  const int lit = static_cast<int>(hues.size());
+  int unexplained = 0;
+  for (const double hue : hues) {
+    std::uint32_t best = 0;
+    double best_distance = 1e9;
+    for (std::uint32_t level = 0; level < 8; ++level)
+      if (hue_distance(hue, level_hue(level)) < best_distance) {
+        best_distance = hue_distance(hue, level_hue(level));
+        best = level;
+      }
+    if (best_distance > 10.0 || levels.count(best) == 0) ++unexplained;
+    else ++pixels_per_level[best];
+  }
   EXPECT_GT(lit, 1000);
   EXPECT_LT(unexplained, lit / 100) << "pixels whose hue is no drawn level's tint";
   int visible_levels = 0;
@@ -202,6 +210,44 @@ TEST_F(RenderCli, BakedRockIsDrawnAndEveryDrawnTriangleIsCounted) {
     }
   EXPECT_GT(lit, picture.width * picture.height / 10);
   EXPECT_EQ(border, 0);
+  std::filesystem::remove_all(dir);
+}
+
+TEST_F(RenderCli, DemoPictureShowsAtLeastTwoDetailTints) {
+  // What scripts/demo does: bake the bundled rock, render it with every default (camera framing
+  // the model, --sse). The picture must show the cut's LOD structure: pixels of at least two
+  // detail levels' tints. The rock has vertex colours (half of each pixel's material), so a pixel
+  // is attributed to the drawn level whose tint hue is nearest to its own.
+  const auto dir = scratch_dir("demo");
+  const auto ply = std::filesystem::path(__FILE__).parent_path().parent_path() / "samples" / "rock_small.ply";
+  ASSERT_TRUE(std::filesystem::exists(ply)) << ply;
+  ASSERT_EQ(octolod("bake " + ply.string() + " -o " + (dir / "rock").string() + " --memory 64M", dir).exit_code, 0);
+  const auto png = dir / "rock.png";
+  const CliRun run = octolod("--json render " + (dir / "rock").string() + " -o " + png.string(), dir);
+  ASSERT_EQ(run.exit_code, 0);
+  ASSERT_TRUE(run.json.is_object());
+  std::vector<std::uint32_t> levels;
+  for (const nlohmann::json& level : run.json.at("lod_histogram")) levels.push_back(level.at("level").get<std::uint32_t>());
+  ASSERT_GE(levels.size(), 2u) << "the default cut is one detail level: " << run.json.dump();
+
+  const Picture picture = read_png(png);
+  std::map<std::uint32_t, int> pixels_per_level;
+  const std::vector<double> hues = lit_hues(picture);
+  const int lit = static_cast<int>(hues.size());
+  for (const double hue : hues) {
+    const auto nearest = std::min_element(levels.begin(), levels.end(), [&](std::uint32_t a, std::uint32_t b) {
+      return hue_distance(hue, level_hue(a)) < hue_distance(hue, level_hue(b));
+    });
+    ++pixels_per_level[*nearest];
+  }
+  EXPECT_GT(lit, picture.width * picture.height / 10);
+  int visible = 0;
+  std::string seen;
+  for (const auto& [level, count] : pixels_per_level) {
+    visible += count >= lit / 50 ? 1 : 0;  // at least 2% of the rock
+    seen += " level " + std::to_string(level) + ": " + std::to_string(count) + " px;";
+  }
+  EXPECT_GE(visible, 2) << seen << " of " << lit << " lit";
   std::filesystem::remove_all(dir);
 }
 
