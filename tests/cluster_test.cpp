@@ -542,6 +542,25 @@ TEST(SimplifyTest, GridRepresentativeIsClampedIntoItsCell) {
   EXPECT_EQ(odd_edges(result.mesh), boundary);
 }
 
+TEST(SimplifyTest, GridFinerThanTheVerticesKeepsTheInput) {
+  // every vertex alone in its cell: each one-vertex cluster keeps its vertex (position bit-identical,
+  // attributes up to renormalization), every triangle survives. Normals and colours only: the
+  // sample's uv seams put two vertex records at one position, a cluster of two.
+  const NodeMesh input = make_sample(samplegen::Shape::rock, 2'000, {true, true, false});
+  const SimplifyResult result = simplify(input, input.bounds(), grid_resolution(1u << 14));
+  EXPECT_EQ(result.mesh.triangle_count(), input.triangle_count());
+  std::map<PositionKey, std::uint32_t> input_vertex;
+  for (std::uint32_t v = 0; v < input.vertex_count(); ++v) input_vertex[position_key(input, v)] = v;
+  const std::size_t stride = input.layout.floats();
+  for (std::uint32_t v = 0; v < result.mesh.vertex_count(); ++v) {
+    const auto found = input_vertex.find(position_key(result.mesh, v));
+    ASSERT_NE(found, input_vertex.end()) << "output vertex " << v << " moved";
+    for (std::size_t i = 3; i < stride; ++i)
+      EXPECT_NEAR(result.mesh.vertices[v * stride + i], input.vertices[found->second * stride + i], 1e-6f);
+  }
+  EXPECT_EQ(result.error_bound, 0.0);
+}
+
 // ---- grid quality ---------------------------------------------------------------------------
 
 TEST(SimplifyTest, GridOutputIsCleanWithinTargetAndNotFlipped) {

@@ -45,14 +45,19 @@ GridDomain make_domain(const PreparedNode& node, std::uint32_t g) {
   return grid;
 }
 
-std::uint32_t cell_index(const GridDomain& grid, std::size_t axis, double local) {
-  const double cell = std::floor((local - grid.min[axis]) / grid.cell_size);
-  return static_cast<std::uint32_t>(std::clamp(cell, 0.0, static_cast<double>(grid.dims[axis] - 1)));
-}
-
 // Cluster key of every vertex: the linear cell index, or kLockedKey | position id.
 std::vector<std::uint64_t> vertex_keys(const PreparedNode& node, const GridDomain& grid) {
   const std::size_t stride = node.mesh.layout.floats();
+  const double inverse_size = 1.0 / grid.cell_size;
+  // cell along axis i = floor((x - origin - min) / size), from the model-unit float x, clamped
+  // to the grid; truncation is the floor once negatives are clamped (and no libm call, which
+  // std::floor is without SSE4.1)
+  std::array<double, 3> start;
+  std::array<double, 3> last_cell;
+  for (std::size_t i = 0; i < 3; ++i) {
+    start[i] = node.origin[i] + grid.min[i];
+    last_cell[i] = static_cast<double>(grid.dims[i] - 1);
+  }
   std::vector<std::uint64_t> keys(node.mesh.vertex_count());
   for (std::size_t v = 0; v < keys.size(); ++v) {
     const std::uint32_t position = node.positions.of_vertex[v];
@@ -62,8 +67,8 @@ std::vector<std::uint64_t> vertex_keys(const PreparedNode& node, const GridDomai
     }
     std::uint64_t key = 0;
     for (std::size_t i = 0; i < 3; ++i) {
-      const double local = static_cast<double>(node.mesh.vertices[v * stride + i]) - node.origin[i];
-      key = key * grid.dims[i] + cell_index(grid, i, local);
+      const double cell = (static_cast<double>(node.mesh.vertices[v * stride + i]) - start[i]) * inverse_size;
+      key = key * grid.dims[i] + static_cast<std::uint32_t>(cell > 0.0 ? std::min(cell, last_cell[i]) : 0.0);
     }
     keys[v] = key;
   }

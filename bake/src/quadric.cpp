@@ -82,14 +82,18 @@ bool solve_well_conditioned(int m, const Matrix& mat, const double* rhs, double*
   const double threshold = kPseudoInverseThreshold * largest;
   Matrix l;  // (only the entries written below are read) unit lower triangle below the diagonal, D on the diagonal
   auto at = [&l](int i, int j) -> double& { return l[static_cast<std::size_t>(i * s + j)]; };
+  Vector ld{};  // row j of L times D: ld[k] = L_jk D_k, one multiplication per update below
   for (int j = 0; j < m; ++j) {
     double d = mat[static_cast<std::size_t>(j * s + j)];
-    for (int k = 0; k < j; ++k) d -= at(j, k) * at(j, k) * at(k, k);
+    for (int k = 0; k < j; ++k) {
+      ld[static_cast<std::size_t>(k)] = at(j, k) * at(k, k);
+      d -= at(j, k) * ld[static_cast<std::size_t>(k)];
+    }
     if (!(d > threshold)) return false;
     at(j, j) = d;
     for (int i = j + 1; i < m; ++i) {
       double v = mat[static_cast<std::size_t>(i * s + j)];
-      for (int k = 0; k < j; ++k) v -= at(i, k) * at(j, k) * at(k, k);
+      for (int k = 0; k < j; ++k) v -= at(i, k) * ld[static_cast<std::size_t>(k)];
       at(i, j) = v / d;
     }
   }
@@ -214,19 +218,23 @@ void minimize_quadric_free_tail(int n, int k, const double* q, const double* mea
                                 double* v) {
   assert(k >= 0 && k < n && n <= kMaxQuadricDim && "free coordinates k..n-1 must be non-empty");
   const int m = n - k;
-  Matrix mat;  // the m x m block is written below
+  Matrix mat{};  // the m x m block is written below
   Vector rhs{};
   const double* b = q + n * (n + 1) / 2;
-  for (int i = 0; i < m; ++i) {
-    const int gi = k + i;
-    double r = -b[gi];
-    for (int j = 0; j < k; ++j) r -= q[packed_index(n, j, gi)] * v[j];  // A_fx v_x
-    rhs[static_cast<std::size_t>(i)] = r;
-    for (int j = 0; j < m; ++j) {
-      const int gj = k + j;
-      mat[static_cast<std::size_t>(i * kMaxQuadricDim + j)] =
-          q[packed_index(n, std::min(gi, gj), std::max(gi, gj))];
+  for (int i = 0; i < m; ++i) rhs[static_cast<std::size_t>(i)] = -b[k + i];
+  const double* row = q;  // packed row r of A: A[r][r..n)
+  for (int r = 0; r < n; ++r) {
+    if (r < k) {
+      for (int i = 0; i < m; ++i) rhs[static_cast<std::size_t>(i)] -= row[k - r + i] * v[r];  // A_fx v_x
+    } else {
+      const int i = r - k;
+      for (int j = i; j < m; ++j) {
+        const double value = row[j - i];
+        mat[static_cast<std::size_t>(i * kMaxQuadricDim + j)] = value;
+        mat[static_cast<std::size_t>(j * kMaxQuadricDim + i)] = value;
+      }
     }
+    row += n - r;
   }
   solve_nearest(m, mat, rhs.data(), mean_free, v + k);
 }

@@ -208,15 +208,22 @@ ClusteredMesh build_clustered_mesh(const NodeMesh& mesh, const Clustering& clust
     ++wedge_vertices[wedge[v]];
   }
 
+  // A cluster of one vertex keeps that vertex: every plane of its triangles passes through it, so
+  // it is the quadrics' minimizer (or, for a flat fan, the minimizer nearest the mean, itself),
+  // and its attributes are those minimizing its wedge's quadric with the position fixed there.
+  // Solving would only add rounding; such clusters (a large share at fine resolutions) get no
+  // quadrics.
+  auto solved = [&](std::uint32_t v) { return !locked(v) && cluster_vertices[cluster[v]] > 1; };
+
   // quadrics: every triangle's area-weighted quadric added to the cluster (position-only) and
-  // the wedge (generalized) of each of its corners
+  // the wedge (generalized) of each of its corners that is solved
   const std::size_t q3 = quadric_doubles(3);
   const std::size_t qn = quadric_doubles(n);
   std::vector<double> cluster_quadric(clustering.count * q3, 0.0);
   std::vector<double> wedge_quadric(attribute_count > 0 ? wedge_count * qn : 0, 0.0);
   for (std::size_t t = 0; t < triangle_count; ++t) {
     const std::uint32_t* corner = &mesh.indices[3 * t];
-    if (locked(corner[0]) && locked(corner[1]) && locked(corner[2])) continue;
+    if (!solved(corner[0]) && !solved(corner[1]) && !solved(corner[2])) continue;
     const std::array<double, 3>& fn = face_normal[t];
     const double area = 0.5 * std::sqrt(fn[0] * fn[0] + fn[1] * fn[1] + fn[2] * fn[2]);
     if (!(area > 0.0)) continue;
@@ -232,7 +239,7 @@ ClusteredMesh build_clustered_mesh(const NodeMesh& mesh, const Clustering& clust
     }
     for (int k = 0; k < 3; ++k) {
       const std::uint32_t v = corner[k];
-      if (locked(v)) continue;
+      if (!solved(v)) continue;
       add_quadric(3, &cluster_quadric[cluster[v] * q3], quadric3);
       if (attribute_count > 0) add_quadric(n, &wedge_quadric[wedge[v] * qn], quadric_n);
     }
@@ -242,7 +249,7 @@ ClusteredMesh build_clustered_mesh(const NodeMesh& mesh, const Clustering& clust
   std::vector<float> wedge_record(wedge_count * stride);
   std::vector<double> cluster_position(clustering.count * 3);
   for (std::uint32_t c = 0; c < clustering.count; ++c) {
-    if (clustering.locked[c] || cluster_vertices[c] == 0) continue;
+    if (clustering.locked[c] || cluster_vertices[c] <= 1) continue;
     double mean[3];
     for (int i = 0; i < 3; ++i) mean[i] = cluster_sum[c * 3 + static_cast<std::size_t>(i)] / cluster_vertices[c];
     double* x = &cluster_position[c * 3];
@@ -258,6 +265,14 @@ ClusteredMesh build_clustered_mesh(const NodeMesh& mesh, const Clustering& clust
     }
     const std::uint32_t c = cluster[root];
     double v[kMaxQuadricDim];
+    if (cluster_vertices[c] == 1) {  // the vertex itself (see `solved`), attributes finished
+      std::memcpy(record, &mesh.vertices[root * stride], 3 * 4);
+      local_vertex(root, v);
+      const double up[3] = {0.0, 0.0, 1.0};  // for a zero normal (finish_attributes' own last resort)
+      finish_attributes(layout, up, v + 3);
+      for (int i = 3; i < n; ++i) record[i] = static_cast<float>(v[i]);
+      continue;
+    }
     if (attribute_count > 0) {
       for (int i = 0; i < 3; ++i) v[i] = cluster_position[c * 3 + static_cast<std::size_t>(i)] * position_scale;
       double mean[kMaxQuadricDim];
