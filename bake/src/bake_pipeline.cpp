@@ -141,7 +141,6 @@ class OctreeInput {
   }
 
   const RootCube& cube() const { return cube_; }
-  VertexLayout layout() const { return layout_; }
   const SortKeyFn& key() const { return key_; }
   const OctreeBudget& budget() const { return budget_; }
   unsigned workers() const { return threads_ > 1 ? threads_ - 1 : 0; }
