@@ -26,7 +26,7 @@ std::size_t mesh_bytes(const NodeMesh& mesh) {
   return (mesh.vertices.size() + mesh.indices.size()) * sizeof(float);
 }
 
-// A child's LOD 0 as its parent will merge it.
+// A child's first simplified LOD as its parent will merge it.
 struct ChildLod {
   bool present = false;
   bool in_memory = false;  // else re-read `file`
@@ -71,8 +71,9 @@ bool later(const Task& a, const Task& b) {
 // What a finished node hands back to the scheduler.
 struct NodeDone {
   NodeLods lods;
-  NodeMesh finest;  // LOD 0, for the parent
-  double finest_error = 0;
+  NodeMesh handed;  // the first simplified LOD (or LOD 0 of a one-LOD leaf), for the parent
+  std::size_t handed_index = 0;
+  double handed_error = 0;
 };
 
 // A thread's reusable buffers.
@@ -262,13 +263,13 @@ class LodTreeBuilder::Impl {
     if (!options_.build_lods) {
       std::vector<Lod> lods(1);
       lods[0].mesh = std::move(mesh);
-      return write_lods(dir, lods);
+      return write_lods(dir, lods, true);
     }
     LodOptions o = options_.lod;
     o.include_input = true;
     auto lods = build_lods(std::move(mesh), 0.0, cell, o);
     if (!lods.ok()) return lods.status();
-    return write_lods(dir, lods.value());
+    return write_lods(dir, lods.value(), true);
   }
 
   Result<NodeDone> run_internal(std::array<ChildLod, 8>& children, const std::string& dir,
@@ -293,7 +294,7 @@ class LodTreeBuilder::Impl {
     o.include_input = false;
     auto lods = build_lods(std::move(merged), input_error, cell, o);
     if (!lods.ok()) return lods.status();
-    return write_lods(dir, lods.value());
+    return write_lods(dir, lods.value(), false);
   }
 
   Status make_directory(const std::string& dir) const {
@@ -307,8 +308,9 @@ class LodTreeBuilder::Impl {
     return {};
   }
 
-  // Writes lod<i>.olod for every LOD; LOD 0 is kept for the parent.
-  Result<NodeDone> write_lods(const std::string& dir, std::vector<Lod>& lods) const {
+  // Writes lod<i>.olod for every LOD; the first simplified one (a leaf's LOD 1, an internal
+  // node's LOD 0) is kept for the parent.
+  Result<NodeDone> write_lods(const std::string& dir, std::vector<Lod>& lods, bool leaf) const {
     OCTOLOD_RETURN_IF_ERROR(make_directory(dir));
     NodeDone done;
     for (std::size_t i = 0; i < lods.size(); ++i) {
@@ -325,13 +327,14 @@ class LodTreeBuilder::Impl {
       done.lods.lods.push_back(std::move(info));
     }
     if (!lods.empty()) {
-      done.finest_error = lods[0].error;
-      done.finest = std::move(lods[0].mesh);
+      done.handed_index = leaf && lods.size() > 1 ? 1 : 0;
+      done.handed_error = lods[done.handed_index].error;
+      done.handed = std::move(lods[done.handed_index].mesh);
     }
     return done;
   }
 
-  // A node's chain is complete: record it and hand its LOD 0 to the parent,
+  // A node's chain is complete: record it and hand its first simplified LOD to the parent,
   // which becomes ready with its last child. Under the lock.
   void deliver(std::int32_t node, NodeDone done) {
     ++completed_;
@@ -339,7 +342,7 @@ class LodTreeBuilder::Impl {
     const std::int32_t parent = s.parent;
     const std::uint32_t octant = s.octant;
     const bool has_lod = options_.build_lods && !done.lods.lods.empty();
-    const std::string finest_file = has_lod ? done.lods.lods[0].file : "";
+    const std::string handed_file = has_lod ? done.lods.lods[done.handed_index].file : "";
     results_[static_cast<std::size_t>(node)] = std::move(done.lods);
     if (parent < 0) return;
     Slot& p = slots_[static_cast<std::size_t>(parent)];
@@ -348,14 +351,14 @@ class LodTreeBuilder::Impl {
       if (!p.child) p.child = std::make_unique<std::array<ChildLod, 8>>();
       ChildLod& c = (*p.child)[octant];
       c.present = true;
-      c.error = done.finest_error;
-      c.file = finest_file;
-      p.child_triangles += done.finest.triangle_count();
-      const std::size_t bytes = mesh_bytes(done.finest);
+      c.error = done.handed_error;
+      c.file = handed_file;
+      p.child_triangles += done.handed.triangle_count();
+      const std::size_t bytes = mesh_bytes(done.handed);
       if (kept_bytes_ + bytes <= options_.keep_bytes) {
         c.in_memory = true;
         c.bytes = bytes;
-        c.mesh = std::move(done.finest);
+        c.mesh = std::move(done.handed);
         kept_bytes_ += bytes;
         stats_.peak_kept_bytes = std::max<std::uint64_t>(stats_.peak_kept_bytes, kept_bytes_);
       }

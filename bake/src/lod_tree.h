@@ -4,18 +4,22 @@
 //   leaf      its triangles are indexed (node_index.h) and become LOD 0 (the original, error 0);
 //             build_lods continues the chain from it
 //   internal  once the stream has left its key range (all its children are known) and every
-//             child's chain is done: merge_meshes of the children's LOD 0 (a leaf's original
-//             triangles, an internal node's first simplification), in octant order, with input
-//             error = the max of those LODs' errors; build_lods from there. Bottom-up whatever
-//             the tree's balance.
+//             child's chain is done: merge_meshes of the children's first simplified LODs (a
+//             leaf's LOD 1, or its LOD 0 when it has only one; an internal node's LOD 0, which
+//             is already its first simplification), in octant order, with input error = the
+//             max of those LODs' errors; build_lods from there. Bottom-up whatever the tree's
+//             balance.
 //
-// Why LOD 0 and not the children's LOD 1: every node keeps its outer boundary at the original
-// resolution (crack-freedom for any cut, simplify.h), so a uniform cut through many small nodes
-// spends most of its triangles on locked boundary fans (on a 1M rock, 38% of a 10% cut's
-// triangles and 60% of a 1% cut's touched a locked edge). Merging LOD 0 makes a parent's LOD 0
-// about twice its children's instead of about as large, so the nodes near the root hold the
-// finer LODs (the 1M rock's root starts at 32K triangles instead of 5.6K) and a coarse uniform
-// cut is a few large nodes with few locked edges; it also saves one accumulated step per level.
+// Why an internal child hands its LOD 0 and not its LOD 1: every node keeps its outer boundary
+// at the original resolution (crack-freedom for any cut, simplify.h), so a uniform cut through
+// many small nodes spends most of its triangles on locked boundary fans (on a 1M rock, 38% of a
+// 10% cut's triangles and 60% of a 1% cut's touched a locked edge). Handing LOD 0 makes a
+// parent's LOD 0 about twice a child's instead of about as large, so the nodes near the root hold
+// the finer LODs (the 1M rock's root starts at 16K triangles instead of 5.6K) and a coarse
+// uniform cut is a few large nodes with few locked edges; one accumulated step less per level.
+// Leaves still hand their LOD 1: handing their original triangles too (root LOD 0 32K) was
+// better still on the rock, but raised the 1M city's peak RSS at --memory 64M from 49 to 124 MiB.
+//
 // Every node's chain ends at LodOptions::min_triangles or where its locked boundary stops the
 // halving, so the nodes near the root (few locked edges) continue into a coarse chain. Errors
 // accumulate along the chains (simplify.h), so every stored error is conservative with respect
@@ -28,7 +32,7 @@
 // input mesh and the options: the output is the same for any thread count and schedule.
 //
 // Memory: the leaves waiting for a thread (queue_bytes), the node work in flight, and the
-// children's LOD 0 kept for their pending parents up to keep_bytes; past that,
+// children's first simplified LODs kept for their pending parents up to keep_bytes; past that,
 // a child's LOD is dropped and its parent re-reads it from the child's file (identical bytes).
 #pragma once
 
