@@ -5,12 +5,7 @@ option(OCTOLOD_WERROR "Treat compiler warnings as errors" OFF)
 option(OCTOLOD_SANITIZE "Build with AddressSanitizer + UndefinedBehaviorSanitizer" OFF)
 
 if(OCTOLOD_SANITIZE)
-  # -O1 (asserts stay on in Debug): the sanitized suite runs several times faster than at -O0,
-  # which keeps CI's second pass short, and ASan's reports keep their line numbers. GCC's
-  # -Wmaybe-uninitialized is unreliable on instrumented code at -O1 (it fires inside libstdc++ for
-  # OpenMesh's property vectors); the Release build keeps the warning.
-  add_compile_options(-fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=undefined
-                      -O1 -Wno-maybe-uninitialized)
+  add_compile_options(-fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=undefined)
   add_link_options(-fsanitize=address,undefined)
 endif()
 
