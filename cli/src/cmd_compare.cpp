@@ -183,7 +183,7 @@ int run_compare(const CompareArgs& args, const CommandContext& context) {
       return report(usage_error("--fractions: every fraction must be in (0, 1]"));
   Progress progress(context);
   const std::filesystem::path root = args.tree;
-  Result<Manifest> manifest = read_manifest(root / std::string(kManifestFileName));
+  Result<Manifest> manifest = read_tree_manifest(root);
   if (!manifest.ok()) return report(manifest.status());
   if (manifest->nodes.empty() || manifest->input_triangles == 0)
     return report(bad_input_error(args.tree + ": the tree holds no triangles"));

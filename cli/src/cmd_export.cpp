@@ -33,7 +33,7 @@ std::string mesh_name(const NodeInfo& node, std::uint32_t lod) {
 int run_export(const ExportArgs& args, const CommandContext& context) {
   const auto start = std::chrono::steady_clock::now();
   const std::filesystem::path root = args.tree;
-  Result<Manifest> manifest = read_manifest(root / std::string(kManifestFileName));
+  Result<Manifest> manifest = read_tree_manifest(root);
   if (!manifest.ok()) return report(manifest.status());
 
   const std::vector<CutEntry> cut = select_cut(manifest.value(), args.cut);

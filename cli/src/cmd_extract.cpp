@@ -32,7 +32,7 @@ struct ExtractArgs {
 int run_extract(const ExtractArgs& args, const CommandContext& context) {
   const auto start = std::chrono::steady_clock::now();
   const std::filesystem::path root = args.tree;
-  Result<Manifest> manifest = read_manifest(root / std::string(kManifestFileName));
+  Result<Manifest> manifest = read_tree_manifest(root);
   if (!manifest.ok()) return report(manifest.status());
 
   const std::vector<CutEntry> cut = select_cut(manifest.value(), args.cut);

@@ -94,6 +94,15 @@ void append_nested(std::string& out, const json& value, std::size_t level) {
   }
 }
 
+json parameters_to_json(const BakeParameters& p) {
+  return {{"input", p.input},
+          {"max_tris", p.max_tris},
+          {"max_depth", p.max_depth},
+          {"memory_budget_bytes", p.memory_budget_bytes},
+          {"threads", p.threads},
+          {"method", p.method}};
+}
+
 json node_to_json(const NodeInfo& n) {
   json lods = json::array();
   for (const LodInfo& l : n.lods)
@@ -115,20 +124,13 @@ json node_to_json(const NodeInfo& n) {
 // time, so the memory is one node's JSON, not the tree's (about 1.5 KB per node as a DOM).
 // Stops at the first false `out` returns; returns whether every piece was taken.
 bool emit_manifest(const Manifest& m, const std::function<bool(std::string_view)>& out) {
-  const BakeParameters& p = m.parameters;
   const json head{{"format", "octolod-manifest"},
                   {"version", m.version},
                   {"layout", layout_to_json(m.layout)},
                   {"bounds", bounds_to_json(m.bounds)},
                   {"input_vertices", m.input_vertices},
                   {"input_triangles", m.input_triangles},
-                  {"parameters",
-                   {{"input", p.input},
-                    {"max_tris", p.max_tris},
-                    {"max_depth", p.max_depth},
-                    {"memory_budget_bytes", p.memory_budget_bytes},
-                    {"threads", p.threads},
-                    {"method", p.method}}},
+                  {"parameters", parameters_to_json(m.parameters)},
                   {"stage_seconds", m.stage_seconds},
                   {"stats", m.stats}};
   std::string piece = "{\n";
@@ -261,6 +263,14 @@ Status write_manifest(const std::filesystem::path& path, const Manifest& manifes
     return io_error(path.string() + ": rename failed: " + ec.message());
   }
   return {};
+}
+
+std::string bake_parameters_to_json(const BakeParameters& parameters) {
+  return parameters_to_json(parameters).dump();
+}
+
+Result<Manifest> read_tree_manifest(const std::filesystem::path& tree_root) {
+  return read_manifest(tree_root / kManifestFileName);
 }
 
 Result<Manifest> read_manifest(const std::filesystem::path& path) {

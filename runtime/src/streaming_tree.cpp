@@ -545,7 +545,7 @@ Result<std::unique_ptr<StreamingTree>> StreamingTree::open(Manifest manifest,
 
 Result<std::unique_ptr<StreamingTree>> StreamingTree::open_directory(
     const std::filesystem::path& root, std::shared_ptr<Executor> executor, StreamingOptions options) {
-  Result<Manifest> manifest = read_manifest(root / std::string(kManifestFileName));
+  Result<Manifest> manifest = read_tree_manifest(root);
   if (!manifest.ok()) return manifest.status();
   return open(std::move(manifest).value(), std::make_shared<FileSource>(root), std::move(executor),
               std::move(options));

@@ -74,6 +74,9 @@ struct Manifest {
 };
 
 std::string manifest_to_json(const Manifest& manifest);
+// The manifest's "parameters" object as compact JSON text (the same keys and values the manifest
+// holds), for tools that report a tree's bake parameters.
+std::string bake_parameters_to_json(const BakeParameters& parameters);
 // Parses and validates (indices in range, parent/child links consistent, depths, files
 // relative and without "..").
 Result<Manifest> manifest_from_json(std::string_view text, std::string_view name);
@@ -81,5 +84,7 @@ Result<Manifest> manifest_from_json(std::string_view text, std::string_view name
 // write_manifest writes atomically (temporary sibling + rename).
 Status write_manifest(const std::filesystem::path& path, const Manifest& manifest);
 Result<Manifest> read_manifest(const std::filesystem::path& path);
+// read_manifest of the manifest.json at the root of a baked tree (the OUT_DIR of a bake).
+Result<Manifest> read_tree_manifest(const std::filesystem::path& tree_root);
 
 }  // namespace octolod
