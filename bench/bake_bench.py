@@ -115,7 +115,10 @@ def main():
                 s = r["stage_seconds"]
                 st = r["stats"]
                 rss = r["process_peak_rss_mib"]
-                row([size, method, memory, "in core" if r["soup_in_core"] else "out of core",
+                path = "out of core"
+                if r["soup_in_core"]:
+                    path = "in core, octree in memory" if st.get("octree_in_memory") else "in core"
+                row([size, method, memory, path,
                      "%.2f" % s["soup"], "%.2f" % s["octree.sort"], "%.2f" % s["octree.stream"],
                      "%.2f" % s.get("lods", 0), "%.2f" % st.get("node_work_seconds", 0),
                      "%.2f" % s["total"], "%.2f" % r["process_seconds"],

@@ -294,26 +294,42 @@ TEST_F(BakeTest, TinyBudgetOutOfCoreGivesTheSameTreeAsALargeBudget) {
   BakeOptions large = options("large");
   large.memory_budget_bytes = 256 << 20;
   large.max_tris = 500;
+  // In core without the in-memory octree: the soup's records sorted by cell.
+  BakeOptions records = large;
+  records.output = path("records");
+  records.in_memory_octree = false;
   auto rs = bake(small);
   ASSERT_TRUE(rs.ok()) << rs.status().message();
   auto rl = bake(large);
   ASSERT_TRUE(rl.ok()) << rl.status().message();
+  auto rr = bake(records);
+  ASSERT_TRUE(rr.ok()) << rr.status().message();
   EXPECT_FALSE(rs->soup_in_core);
   EXPECT_TRUE(rl->soup_in_core);
+  EXPECT_TRUE(rr->soup_in_core);
+  EXPECT_FALSE(rs->octree_in_memory);
+  EXPECT_TRUE(rl->octree_in_memory);
+  EXPECT_FALSE(rr->octree_in_memory);
   EXPECT_GT(rs->sort_runs, 1u);
   EXPECT_EQ(rl->sort_runs, 0u);
+  EXPECT_EQ(rr->sort_runs, 0u);
   // Out of core the soup goes straight into the octree sort; in core through a soup file.
   EXPECT_EQ(rs->manifest.stats.at("soup_streamed_to_sort"), 1.0);
-  EXPECT_EQ(rl->manifest.stats.at("soup_streamed_to_sort"), 0.0);
+  EXPECT_EQ(rr->manifest.stats.at("soup_streamed_to_sort"), 0.0);
   // The small budget keeps few children's LODs in memory: parents re-read the others.
   EXPECT_GT(rs->manifest.stats.at("lod_rereads"), 0.0);
   EXPECT_EQ(rl->manifest.stats.at("lod_rereads"), 0.0);
   auto a = tree_files(path("small"));
   auto b = tree_files(path("large"));
+  auto c = tree_files(path("records"));
   a.erase("manifest.json");
   b.erase("manifest.json");
+  c.erase("manifest.json");
   EXPECT_TRUE(a == b);
+  EXPECT_TRUE(c == b);
   EXPECT_EQ(manifest_to_json(without_run_details(rs->manifest)),
+            manifest_to_json(without_run_details(rl->manifest)));
+  EXPECT_EQ(manifest_to_json(without_run_details(rr->manifest)),
             manifest_to_json(without_run_details(rl->manifest)));
 }
 

@@ -291,6 +291,55 @@ TEST(Soup, SinkReceivesTheSoupInsteadOfAFile) {
   }
 }
 
+TEST(Soup, MeshSinkReceivesTheIndexedMeshInsteadOfRecords) {
+  WorkDir dir;
+  const GridMesh mesh = make_grid(60, 40);
+  write_mesh(dir.file("grid.ply"), mesh);
+  SoupOptions options = options_in(dir, kMinSoupBudget * 4);
+  int records = 0;
+  options.sink = [&](std::span<const std::byte>) {
+    ++records;
+    return Status{};
+  };
+  std::vector<float> vertices;
+  std::vector<std::uint32_t> triangles;
+  options.mesh_sink.accepts = [&](VertexLayout layout, std::uint64_t v, std::uint64_t t) {
+    EXPECT_EQ(layout, mesh.layout);
+    EXPECT_EQ(v, mesh.vertices.size() / mesh.layout.floats());
+    EXPECT_EQ(t, mesh.triangles.size() / 3);
+    return true;
+  };
+  options.mesh_sink.consume = [&](const SoupMesh& m) {
+    vertices.assign(m.vertices.begin(), m.vertices.end());
+    triangles.assign(m.triangles.begin(), m.triangles.end());
+    EXPECT_LE(m.free_budget_bytes, options.memory_budget_bytes -
+                                        vertices.size() * sizeof(float) -
+                                        triangles.size() * sizeof(std::uint32_t));
+    return Status{};
+  };
+  auto r = build_soup(dir.file("grid.ply"), options);
+  ASSERT_TRUE(r.ok()) << r.status().message();
+  EXPECT_TRUE(r->mesh_consumed);
+  EXPECT_TRUE(r->in_core);
+  EXPECT_TRUE(r->soup.empty());
+  EXPECT_EQ(records, 0);
+  EXPECT_EQ(vertices, mesh.vertices);
+  EXPECT_EQ(triangles, mesh.triangles);
+  EXPECT_EQ(dir.work_file_count(), 0u);
+  // Refused (or out of core): the records path, and consume's error ends the stage.
+  options.mesh_sink.accepts = [](VertexLayout, std::uint64_t, std::uint64_t) { return false; };
+  auto refused = build_soup(dir.file("grid.ply"), options);
+  ASSERT_TRUE(refused.ok());
+  EXPECT_FALSE(refused->mesh_consumed);
+  EXPECT_GT(records, 0);
+  options.mesh_sink.accepts = [](VertexLayout, std::uint64_t, std::uint64_t) { return true; };
+  options.mesh_sink.consume = [](const SoupMesh&) { return bad_input_error("mesh says no"); };
+  auto failed = build_soup(dir.file("grid.ply"), options);
+  ASSERT_FALSE(failed.ok());
+  EXPECT_EQ(failed.status().message(), "mesh says no");
+  EXPECT_EQ(dir.work_file_count(), 0u);
+}
+
 TEST(Soup, FacesBeforeVerticesGiveTheSameSoup) {
   WorkDir dir;
   const std::string ply =
@@ -307,8 +356,16 @@ TEST(Soup, FacesBeforeVerticesGiveTheSameSoup) {
   for (const bool force : {false, true}) {
     SoupOptions options = options_in(dir, 1u << 20);
     options.force_out_of_core = force;
+    // The quad fans out into more triangles than the 3 faces declared: a mesh sink is never
+    // handed a truncated mesh, the stage reads the PLY again for the records path.
+    options.mesh_sink.accepts = [](VertexLayout, std::uint64_t, std::uint64_t) { return true; };
+    options.mesh_sink.consume = [](const SoupMesh&) {
+      ADD_FAILURE() << "mesh sink called for a fanned-out polygon";
+      return Status{};
+    };
     auto r = build_soup(dir.file("f.ply"), options);
     ASSERT_TRUE(r.ok()) << r.status().message();
+    EXPECT_FALSE(r->mesh_consumed);
     EXPECT_EQ(r->triangle_count, 4u);
     EXPECT_TRUE(read_bytes(r->soup.path()) == expected);
   }

@@ -5,6 +5,7 @@
 #include "octolod/bake/bake.h"
 
 #include <algorithm>
+#include <bit>
 #include <chrono>
 #include <cstring>
 #include <optional>
@@ -20,6 +21,7 @@
 #include "lod_tree.h"
 #include "octolod/formats/node_file.h"
 #include "octree_build.h"
+#include "page_array.h"
 #include "peak_rss.h"
 #include "record_file.h"
 #include "temp_dir.h"
@@ -46,10 +48,7 @@ SortKeyFn centroid_morton_key(const MortonQuantizer& quantizer, VertexLayout lay
       float corner[3][3];
       for (int c = 0; c < 3; ++c)
         std::memcpy(corner[c], record + soup_corner_offset(layout, c), sizeof corner[c]);
-      double centroid[3];
-      for (int a = 0; a < 3; ++a)
-        centroid[a] = (static_cast<double>(corner[0][a]) + corner[1][a] + corner[2][a]) / 3.0;
-      keys[i] = quantizer.key(centroid);
+      keys[i] = centroid_key(quantizer, corner[0], corner[1], corner[2]);
     }
   };
 }
@@ -190,6 +189,21 @@ class OctreeInput {
   std::optional<RecordWriter> writer_;
 };
 
+LodTreeOptions lod_tree_options(const BakeOptions& options, VertexLayout layout,
+                                const RootCube& cube, const fs::path& root, unsigned workers,
+                                const OctreeBudget& budget) {
+  LodTreeOptions o;
+  o.root = root;
+  o.layout = layout;
+  o.cube = cube;
+  o.build_lods = options.lods;
+  o.lod.method = options.method;
+  o.workers = workers;
+  o.queue_bytes = budget.queue_bytes;
+  o.keep_bytes = budget.keep_bytes;
+  return o;
+}
+
 struct OctreeResult {
   RootCube cube;
   std::vector<OctreeNode> nodes;
@@ -202,6 +216,22 @@ struct OctreeResult {
   double stream_seconds = 0;  // merge + tree decision, node work overlapping
   double lod_seconds = 0;     // the node work left when the stream ended (wall)
 };
+
+// lods: the node work still queued and the upper levels, which wait for their children. Moves
+// the tree and its LODs into `result`.
+Status finish_lod_tree(const BakeOptions& options, LodTreeBuilder& lod_tree,
+                       OctreeBuilder& builder, OctreeResult& result) {
+  const auto start = Clock::now();
+  OCTOLOD_RETURN_IF_ERROR(
+      lod_tree.finish(builder.nodes(), [&](std::uint64_t nodes_done, std::uint64_t total) {
+        if (options.progress) options.progress("lods", nodes_done, total);
+      }));
+  result.lod_seconds = seconds_since(start);
+  result.nodes = std::move(builder.nodes());
+  result.lods = std::move(lod_tree.results());
+  result.lod_stats = lod_tree.stats();
+  return {};
+}
 
 // Streams the Morton-sorted soup through the OctreeBuilder, leaves written into `root` (seed
 // 3.4, 4.3).
@@ -228,16 +258,8 @@ Result<OctreeResult> build_octree(const BakeOptions& options, const SoupResult& 
   // octree: one pass over the sorted stream decides the tree and hands out the leaves, whose
   // LOD chains (and then their parents') are built meanwhile (lod_tree.h)
   start = Clock::now();
-  LodTreeOptions lod_options;
-  lod_options.root = root;
-  lod_options.layout = soup.layout;
-  lod_options.cube = result.cube;
-  lod_options.build_lods = options.lods;
-  lod_options.lod.method = options.method;
-  lod_options.workers = workers;
-  lod_options.queue_bytes = budget.queue_bytes;
-  lod_options.keep_bytes = budget.keep_bytes;
-  LodTreeBuilder lod_tree(lod_options);
+  LodTreeBuilder lod_tree(
+      lod_tree_options(options, soup.layout, result.cube, root, workers, budget));
   OctreeBuilder* builder_ptr = nullptr;
   OctreeBuilder builder(options.max_tris, options.max_depth, record_bytes,
                         [&](std::int32_t node, std::vector<std::byte>&& records) {
@@ -270,17 +292,183 @@ Result<OctreeResult> build_octree(const BakeOptions& options, const SoupResult& 
   OCTOLOD_RETURN_IF_ERROR(streamed);
   result.sort = sorter.stats();
   result.stream_seconds = seconds_since(start);
+  OCTOLOD_RETURN_IF_ERROR(finish_lod_tree(options, lod_tree, builder, result));
+  return result;
+}
 
-  // lods: the node work still queued and the upper levels, which wait for their children
+// The in-memory octree (SoupMeshSink): when the indexed mesh fits in the budget, each
+// triangle's centroid key is computed from the vertex array, the (key, triangle id) pairs are
+// sorted in memory, the tree is decided from the keys alone, and each leaf's soup records are
+// gathered straight from the mesh: no soup records are produced or sorted externally. The
+// leaves are the records path's: the soup (SoupOrder::by_last_corner) comes in (corner 2's
+// vertex id, triangle id) order and the octree sort is stable, so a leaf holds its triangles
+// by (key, corner 2's vertex id, triangle id), as here.
+//
+// A pair is packed into one u64, key << id_bits | triangle id; a stable radix sort on the key
+// bits of pairs made in triangle order orders them by (key, triangle id); runs of equal keys are
+// then ordered by corner 2.
+unsigned mesh_id_bits(std::uint64_t triangles) {
+  return std::max(1u, static_cast<unsigned>(std::bit_width(std::max<std::uint64_t>(triangles, 1) - 1)));
+}
+
+// Keys handed to the OctreeBuilder per push.
+constexpr std::size_t kMeshKeyBlock = 1 << 14;
+
+// Whether the in-memory octree takes a mesh of this shape: the packing fits in 64 bits and the
+// mesh (vertex array, 12 bytes per triangle), the packed pairs with their radix scratch and the
+// key block fit in what the node work leaves of the budget.
+bool mesh_octree_fits(const BakeOptions& options, unsigned workers, VertexLayout layout,
+                      std::uint64_t vertices, std::uint64_t triangles) {
+  if (3 * options.max_depth + mesh_id_bits(triangles) > 64) return false;
+  auto budget = divide_octree_budget(options, layout, workers);
+  if (!budget.ok()) return false;
+  const std::uint64_t bytes = vertices * layout.bytes() +
+                              triangles * (12 + 2 * sizeof(std::uint64_t)) +
+                              kMeshKeyBlock * sizeof(std::uint64_t);
+  return bytes <= budget->sort_bytes;
+}
+
+// Stable LSD radix sort of `values` by their bits [low, low + bits), 11 bits per pass (digits
+// that do not vary are skipped). `scratch` holds values.size() entries; the result ends in
+// `values`.
+void radix_sort_u64(std::span<std::uint64_t> values, std::span<std::uint64_t> scratch,
+                    unsigned low, unsigned bits) {
+  constexpr unsigned kDigit = 11;
+  constexpr std::size_t kBuckets = std::size_t{1} << kDigit;
+  const std::size_t n = values.size();
+  if (n < 2) return;
+  const unsigned passes = (bits + kDigit - 1) / kDigit;
+  std::vector<std::uint32_t> counts(passes * kBuckets, 0);
+  for (const std::uint64_t v : values)
+    for (unsigned p = 0; p < passes; ++p)
+      ++counts[p * kBuckets + ((v >> (low + kDigit * p)) & (kBuckets - 1))];
+  std::uint64_t* from = values.data();
+  std::uint64_t* to = scratch.data();
+  for (unsigned p = 0; p < passes; ++p) {
+    std::uint32_t* count = counts.data() + p * kBuckets;
+    const unsigned shift = low + kDigit * p;
+    if (count[(from[0] >> shift) & (kBuckets - 1)] == n) continue;  // the same everywhere
+    std::uint32_t offset = 0;
+    for (std::size_t b = 0; b < kBuckets; ++b) {
+      const std::uint32_t next = offset + count[b];
+      count[b] = offset;
+      offset = next;
+    }
+    for (std::size_t i = 0; i < n; ++i) {
+      const std::uint64_t v = from[i];
+      to[count[(v >> shift) & (kBuckets - 1)]++] = v;
+    }
+    std::swap(from, to);
+  }
+  if (from != values.data()) std::copy(from, from + n, values.data());
+}
+
+// The mesh's triangles in leaf order, packed (see above).
+PageArray<std::uint64_t> sort_mesh_triangles(const BakeOptions& options, unsigned threads,
+                                             const SoupMesh& mesh, const RootCube& cube,
+                                             unsigned id_bits) {
+  const std::size_t floats = mesh.layout.floats();
+  const std::size_t n = mesh.triangles.size() / 3;
+  const MortonQuantizer quantizer(cube, options.max_depth);
+  PageArray<std::uint64_t> packed(n);
+  auto compute = [&](std::size_t begin, std::size_t end) {
+    for (std::size_t t = begin; t < end; ++t) {
+      const std::uint32_t* v = mesh.triangles.data() + 3 * t;
+      const std::uint64_t key =
+          centroid_key(quantizer, mesh.vertices.data() + std::size_t{v[0]} * floats,
+                       mesh.vertices.data() + std::size_t{v[1]} * floats,
+                       mesh.vertices.data() + std::size_t{v[2]} * floats);
+      packed[t] = key << id_bits | t;
+    }
+  };
+  if (threads > 1 && n >= (1u << 16)) {
+    std::thread helper(compute, n / 2, n);
+    compute(0, n / 2);
+    helper.join();
+  } else {
+    compute(0, n);
+  }
+  {
+    // By key only: the pairs start in triangle id order and the sort is stable.
+    PageArray<std::uint64_t> scratch(n);
+    radix_sort_u64(std::span<std::uint64_t>(packed.get(), n),
+                   std::span<std::uint64_t>(scratch.get(), n), id_bits, 3 * options.max_depth);
+  }
+  // Equal keys: by corner 2's vertex id, then triangle id (already so).
+  const std::uint64_t id_mask = (std::uint64_t{1} << id_bits) - 1;
+  auto corner2 = [&](std::uint64_t p) { return mesh.triangles[3 * (p & id_mask) + 2]; };
+  for (std::size_t i = 0; i < n;) {
+    std::size_t j = i + 1;
+    while (j < n && (packed[j] >> id_bits) == (packed[i] >> id_bits)) ++j;
+    if (j - i > 1) {
+      std::stable_sort(packed.get() + i, packed.get() + j,
+                       [&](std::uint64_t a, std::uint64_t b) { return corner2(a) < corner2(b); });
+    }
+    i = j;
+  }
+  return packed;
+}
+
+Result<OctreeResult> build_octree_from_mesh(const BakeOptions& options, unsigned threads,
+                                            const SoupMesh& mesh, const fs::path& root) {
+  OctreeResult result;
+  result.cube = RootCube::around(mesh.bounds);
+  const unsigned workers = threads > 1 ? threads - 1 : 0;
+  auto budget = divide_octree_budget(options, mesh.layout, workers);
+  if (!budget.ok()) return budget.status();
+  const std::size_t n = mesh.triangles.size() / 3;
+  const unsigned id_bits = mesh_id_bits(n);
+
+  // sort: keys computed and sorted in memory
+  auto start = Clock::now();
+  const PageArray<std::uint64_t> packed =
+      sort_mesh_triangles(options, threads, mesh, result.cube, id_bits);
+  result.sort.records = n;
+  result.sort.in_core = true;
+  result.sort_seconds = seconds_since(start);
+  if (cleanup_signal_received()) return interrupted();
+
+  // octree: the tree from the keys alone; each leaf's records gathered from the mesh
   start = Clock::now();
-  OCTOLOD_RETURN_IF_ERROR(
-      lod_tree.finish(builder.nodes(), [&](std::uint64_t nodes_done, std::uint64_t total) {
-        if (options.progress) options.progress("lods", nodes_done, total);
-      }));
-  result.lod_seconds = seconds_since(start);
-  result.nodes = std::move(builder.nodes());
-  result.lods = std::move(lod_tree.results());
-  result.lod_stats = lod_tree.stats();
+  LodTreeBuilder lod_tree(
+      lod_tree_options(options, mesh.layout, result.cube, root, workers, budget.value()));
+  const std::size_t floats = mesh.layout.floats();
+  const std::size_t vertex_bytes = mesh.layout.bytes();
+  const std::size_t record_bytes = soup_record_bytes(mesh.layout);
+  const std::uint64_t id_mask = (std::uint64_t{1} << id_bits) - 1;
+  std::size_t next_leaf = 0;  // first entry of `packed` in the next leaf
+  OctreeBuilder* builder_ptr = nullptr;
+  OctreeBuilder builder(
+      options.max_tris, options.max_depth, 0,
+      [&](std::int32_t node, std::vector<std::byte>&&) -> Status {
+        if (cleanup_signal_received()) return interrupted();
+        const auto& nodes = builder_ptr->nodes();
+        const std::size_t count = nodes[static_cast<std::size_t>(node)].triangles;
+        std::vector<std::byte> records(count * record_bytes);
+        std::byte* out = records.data();
+        for (std::size_t i = next_leaf; i < next_leaf + count; ++i, out += record_bytes) {
+          const auto t = static_cast<std::uint32_t>(packed[i] & id_mask);
+          for (std::size_t c = 0; c < 3; ++c) {
+            const float* v = mesh.vertices.data() + std::size_t{mesh.triangles[3 * std::size_t{t} + c]} * floats;
+            std::memcpy(out + c * vertex_bytes, v, vertex_bytes);
+          }
+          std::memcpy(out + 3 * vertex_bytes, &t, sizeof t);
+        }
+        next_leaf += count;
+        return lod_tree.add_leaf(node, nodes, std::move(records));
+      });
+  builder_ptr = &builder;
+  std::vector<std::uint64_t> keys(kMeshKeyBlock);
+  for (std::size_t first = 0; first < n; first += kMeshKeyBlock) {
+    const std::size_t m = std::min(kMeshKeyBlock, n - first);
+    for (std::size_t i = 0; i < m; ++i) keys[i] = packed[first + i] >> id_bits;
+    OCTOLOD_RETURN_IF_ERROR(
+        builder.push({}, std::span<const std::uint64_t>(keys.data(), m)));
+    if (options.progress) options.progress("octree", first + m, n);
+  }
+  OCTOLOD_RETURN_IF_ERROR(builder.finish());
+  result.stream_seconds = seconds_since(start);
+  OCTOLOD_RETURN_IF_ERROR(finish_lod_tree(options, lod_tree, builder, result));
   return result;
 }
 Manifest assemble_manifest(const BakeOptions& options, unsigned threads, const SoupResult& soup,
@@ -382,12 +570,27 @@ Result<BakeReport> run_bake(const BakeOptions& options) {
     soup_options.sink = [&](std::span<const std::byte> records) {
       return octree_input.push(records);
     };
+    std::optional<OctreeResult> mesh_octree;
+    if (options.in_memory_octree) {
+      soup_options.mesh_sink.accepts = [&](VertexLayout layout, std::uint64_t vertices,
+                                           std::uint64_t triangles) {
+        return mesh_octree_fits(options, octree_input.workers(), layout, vertices, triangles);
+      };
+      soup_options.mesh_sink.consume = [&](const SoupMesh& mesh) -> Status {
+        auto built = build_octree_from_mesh(options, threads, mesh, staging->path());
+        if (!built.ok()) return built.status();
+        mesh_octree.emplace(std::move(built).value());
+        return {};
+      };
+    }
     auto soup = build_soup(options.input, soup_options);
     if (!soup.ok()) return soup.status();
     if (cleanup_signal_received()) return interrupted();
 
-    // octree
-    auto octree = build_octree(options, soup.value(), octree_input, staging->path());
+    // octree (built already when the soup stage handed over the mesh)
+    auto octree = soup->mesh_consumed
+                      ? Result<OctreeResult>(std::move(*mesh_octree))
+                      : build_octree(options, soup.value(), octree_input, staging->path());
     if (!octree.ok()) return octree.status();
 
     // manifest
@@ -404,6 +607,8 @@ Result<BakeReport> run_bake(const BakeOptions& options) {
     manifest.stats["lod_rereads"] = static_cast<double>(octree->lod_stats.reread_lods);
     manifest.stats["lod_kept_bytes_peak"] = static_cast<double>(octree->lod_stats.peak_kept_bytes);
     report.soup_in_core = soup->in_core;
+    report.octree_in_memory = soup->mesh_consumed;
+    manifest.stats["octree_in_memory"] = soup->mesh_consumed ? 1 : 0;
     report.sort_runs = octree->sort.runs;
     manifest.stats["soup_in_core"] = soup->in_core ? 1 : 0;
     manifest.stats["octree_sort_runs"] = static_cast<double>(octree->sort.runs);

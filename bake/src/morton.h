@@ -103,4 +103,14 @@ class MortonQuantizer {
   std::uint32_t last_;
 };
 
+// Sort key of a triangle: the key of its centroid, the mean of its corners' positions (model
+// units) taken in double precision.
+inline std::uint64_t centroid_key(const MortonQuantizer& quantizer, const float* a,
+                                  const float* b, const float* c) {
+  double centroid[3];
+  for (int i = 0; i < 3; ++i)
+    centroid[i] = (static_cast<double>(a[i]) + b[i] + c[i]) / 3.0;
+  return quantizer.key(centroid);
+}
+
 }  // namespace octolod::bake

@@ -47,7 +47,9 @@ class OctreeBuilder {
  public:
   // max_depth <= kMaxOctreeDepth (morton.h), max_tris >= 1; keys pushed must have max_depth
   // levels. on_leaf is called from push()/finish(), in key order; an error it returns ends the
-  // build with that error.
+  // build with that error. record_bytes 0 decides the tree from the keys alone: leaves get no
+  // records, and a leaf's triangles are the next OctreeNode::triangles keys of the stream.
+  // The tree (nodes(), leaves and their order) depends on the keys only.
   OctreeBuilder(std::uint32_t max_tris, std::uint32_t max_depth, std::size_t record_bytes,
                 LeafFn on_leaf);
 

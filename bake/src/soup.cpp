@@ -118,24 +118,33 @@ class SoupBuilder {
 
   Result<SoupResult> run(const std::filesystem::path& ply) {
     const auto start = std::chrono::steady_clock::now();
-    PlyReadOptions read_options;
-    read_options.buffer_bytes = io_;
-    auto reader = PlyReader::open(ply, read_options);
-    if (!reader.ok()) return reader.status();
-    reader_ = std::move(reader).value();
-    const PlyInfo& info = reader_->info();
+    OCTOLOD_RETURN_IF_ERROR(open_reader(ply));
+    const PlyInfo info = reader_->info();
     layout_ = info.layout;
     split_total_ = info.vertex_count + info.face_count;
     const std::uint64_t vertex_array_bytes = info.vertex_count * layout_.bytes();
     const bool in_core =
         !options_.force_out_of_core && vertex_array_bytes <= options_.memory_budget_bytes / 2;
-    Status status = in_core ? run_in_core(info.vertex_count) : run_out_of_core();
+    Status status;
+    if (in_core && options_.mesh_sink.consume &&
+        options_.mesh_sink.accepts(layout_, info.vertex_count, info.face_count)) {
+      bool fanned_out = false;
+      status = run_mesh(info.vertex_count, info.face_count, fanned_out);
+      if (fanned_out) {  // more triangles than the mesh's arrays hold: the records path
+        OCTOLOD_RETURN_IF_ERROR(open_reader(ply));
+        status = run_in_core(info.vertex_count);
+      } else {
+        result_.mesh_consumed = true;
+      }
+    } else {
+      status = in_core ? run_in_core(info.vertex_count) : run_out_of_core();
+    }
     if (!status.ok()) return status;
 
     result_.soup = std::move(soup_file_);
     result_.layout = layout_;
     result_.in_core = in_core;
-    result_.seconds.total = seconds_since(start);
+    result_.seconds.total = seconds_since(start) - consume_seconds_;
     for (const SortStats& s : result_.sorts) result_.seconds.sort += s.seconds;
     result_.seconds.split = split_wall_ - split_sort_seconds_;
     result_.seconds.dereference =
@@ -172,8 +181,18 @@ class SoupBuilder {
     return SoupOutput::open(options_, layout_, io_, soup_file_);
   }
 
-  // Runs the split into `sinks` and records the split's wall time and the sort time inside it.
-  Status split(SplitSinks sinks, const RecordSorter& sorter) {
+  Status open_reader(const std::filesystem::path& ply) {
+    PlyReadOptions read_options;
+    read_options.buffer_bytes = io_;
+    auto reader = PlyReader::open(ply, read_options);
+    if (!reader.ok()) return reader.status();
+    reader_ = std::move(reader).value();
+    return {};
+  }
+
+  // Runs the split into `sinks` and records the split's wall time and the sort time inside it
+  // (`sorter`'s, if any).
+  Status split(SplitSinks sinks, const RecordSorter* sorter) {
     const auto start = std::chrono::steady_clock::now();
     sinks.progress = [this](std::uint64_t done) { progress("split", done, split_total_); };
     auto split = split_ply(*reader_, io_, sinks);
@@ -183,8 +202,47 @@ class SoupBuilder {
     result_.triangle_count = split->triangle_count;
     result_.bounds = split->bounds;
     split_wall_ = seconds_since(start);
-    split_sort_seconds_ = sorter.stats().seconds;
+    split_sort_seconds_ = sorter ? sorter->stats().seconds : 0.0;
     return {};
+  }
+
+  // Vertices and triangles in memory, handed to SoupOptions::mesh_sink. Sets `fanned_out`
+  // (and returns an error) when the faces give more than `face_count` triangles.
+  Status run_mesh(std::uint64_t vertex_count, std::uint64_t face_count, bool& fanned_out) {
+    const std::size_t floats = layout_.floats();
+    PageArray<float> vertices(vertex_count * floats);
+    PageArray<std::uint32_t> triangles(3 * face_count);
+    std::uint64_t triangle_count = 0;
+    SplitSinks sinks;
+    sinks.vertices = [&](std::uint64_t first, std::span<const float> v) {
+      std::copy(v.begin(), v.end(), vertices.get() + first * floats);
+      return Status{};
+    };
+    sinks.triangles = [&](std::span<const TriangleRecord> t) {
+      if (triangle_count + t.size() > face_count) {
+        fanned_out = true;
+        return unsupported_error("polygons fan out into more triangles than the faces declared");
+      }
+      std::uint32_t* out = triangles.get() + 3 * triangle_count;
+      for (const TriangleRecord& r : t) {
+        for (int c = 0; c < 3; ++c) *out++ = static_cast<std::uint32_t>(r.corner[c]);
+      }
+      triangle_count += t.size();
+      return Status{};
+    };
+    OCTOLOD_RETURN_IF_ERROR(split(std::move(sinks), nullptr));
+    SoupMesh mesh;
+    mesh.layout = layout_;
+    mesh.vertices = std::span<const float>(vertices.get(), vertex_count * floats);
+    mesh.triangles = std::span<const std::uint32_t>(triangles.get(), 3 * triangle_count);
+    mesh.bounds = result_.bounds;
+    const std::uint64_t in_use = vertex_count * layout_.bytes() + 12 * face_count;
+    mesh.free_budget_bytes =
+        options_.memory_budget_bytes - std::min(in_use, options_.memory_budget_bytes);
+    const auto start = std::chrono::steady_clock::now();
+    Status consumed = options_.mesh_sink.consume(mesh);
+    consume_seconds_ = seconds_since(start);
+    return consumed;
   }
 
   // Vertices in memory; triangle records sorted into the output order, then gathered.
@@ -216,7 +274,7 @@ class SoupBuilder {
     sinks.triangles = [&](std::span<const TriangleRecord> t) {
       return triangles.push(std::as_bytes(t));
     };
-    OCTOLOD_RETURN_IF_ERROR(split(std::move(sinks), triangles));
+    OCTOLOD_RETURN_IF_ERROR(split(std::move(sinks), &triangles));
     OCTOLOD_RETURN_IF_ERROR(triangles.finish());
     progress("dereference", 0, result_.triangle_count);
 
@@ -256,7 +314,7 @@ class SoupBuilder {
       sinks.triangles = [&](std::span<const TriangleRecord> t) {
         return current->push(std::as_bytes(t));
       };
-      OCTOLOD_RETURN_IF_ERROR(split(std::move(sinks), *current));
+      OCTOLOD_RETURN_IF_ERROR(split(std::move(sinks), current.get()));
       OCTOLOD_RETURN_IF_ERROR(vertex_writer->finish());
     }
     OCTOLOD_RETURN_IF_ERROR(current->finish());
@@ -345,6 +403,7 @@ class SoupBuilder {
   std::uint64_t split_total_ = 0;
   double split_wall_ = 0;
   double split_sort_seconds_ = 0;
+  double consume_seconds_ = 0;  // inside SoupOptions::mesh_sink.consume
   TempFile soup_file_;
   SoupResult result_;
 };

@@ -96,6 +96,31 @@ struct SoupSinkStart {
   std::uint64_t free_budget_bytes = 0;
 };
 
+// The indexed mesh the in-core path hands to SoupMeshSink::consume instead of a soup.
+struct SoupMesh {
+  VertexLayout layout;
+  std::span<const float> vertices;           // vertex_count * layout.floats(), PLY order
+  std::span<const std::uint32_t> triangles;  // 3 vertex ids (< vertex count) per triangle, in
+                                             // PLY triangle order: triangle id = index / 3
+  Bounds bounds;                             // as SoupResult::bounds, model units
+  // Bytes of memory_budget_bytes the stage leaves unused during consume(): the budget minus
+  // the two arrays above.
+  std::uint64_t free_budget_bytes = 0;
+};
+
+// A consumer that can work from the indexed mesh itself (the bake's in-memory octree), which
+// saves producing soup records at all. Both functions are called from the calling thread.
+struct SoupMeshSink {
+  // Whether the consumer takes a mesh of `vertex_count` vertices and up to `triangle_count`
+  // triangles: the mesh (vertex_count * layout.bytes() + 12 bytes per triangle) and whatever
+  // the consumer allocates must fit in memory_budget_bytes together.
+  std::function<bool(VertexLayout layout, std::uint64_t vertex_count,
+                     std::uint64_t triangle_count)>
+      accepts;
+  // Receives the mesh (valid during the call only). An error it returns ends build_soup.
+  std::function<Status(const SoupMesh& mesh)> consume;
+};
+
 struct SoupOptions {
   // Cap on all buffers of the stage together: PLY reader, file buffers, sorts, and in core the
   // vertex array. Must be at least kMinSoupBudget. Larger budgets mean fewer sorted runs and,
@@ -118,6 +143,12 @@ struct SoupOptions {
   // Optional, with `sink`: called once after the split, before the first record reaches `sink`
   // (also when there are none). An error it returns ends build_soup with that error.
   std::function<Status(const SoupSinkStart& start)> sink_start;
+  // Optional: when the vertices fit (the in-core path) and mesh_sink.accepts the PLY's declared
+  // vertex and face counts, the split keeps the triangles in memory and mesh_sink.consume gets
+  // the mesh; no soup record is produced (SoupResult::soup empty, `sink` never called,
+  // SoupResult::mesh_consumed set). If the faces fan out into more triangles than declared, the
+  // PLY is read again for the records path.
+  SoupMeshSink mesh_sink;
 };
 
 inline constexpr std::uint64_t kMinSoupBudget = 256 * 1024;
@@ -126,7 +157,7 @@ struct SoupStageSeconds {
   double split = 0;        // reading the PLY, writing the vertex file (wall, sorting excluded)
   double sort = 0;         // inside the external sorts (run formation and merging)
   double dereference = 0;  // scanning vertices and writing corners (sorting excluded)
-  double total = 0;        // wall time of build_soup
+  double total = 0;        // wall time of build_soup, SoupMeshSink::consume excluded
 };
 
 struct SoupResult {
@@ -137,6 +168,7 @@ struct SoupResult {
   std::uint64_t triangle_count = 0;
   Bounds bounds;         // of every vertex in the file (unreferenced ones included), model units
   bool in_core = false;  // which path was taken
+  bool mesh_consumed = false;  // SoupOptions::mesh_sink received the mesh (in core only)
   SoupStageSeconds seconds;
   std::vector<SortStats> sorts;  // one per external sort, in the order they ran
 };
