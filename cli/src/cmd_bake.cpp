@@ -6,28 +6,16 @@
 // input vanishing while read). A failed or interrupted bake publishes nothing and leaves no
 // temporary file.
 #include <cstdio>
-#include <memory>
 #include <optional>
 #include <string>
 
 #include "command.h"
+#include "commands.h"
 #include "octolod/bake/bake.h"
 #include "progress.h"
 
 namespace octolod::cli {
 namespace {
-
-struct BakeArgs {
-  std::string input;
-  std::string output;
-  std::uint32_t max_tris = 2000;
-  std::uint32_t max_depth = 10;
-  std::string memory = "64M";
-  std::string work_dir;
-  unsigned threads = 0;
-  bool out_of_core = false;
-  std::string method = "grid";
-};
 
 std::uint64_t lod_count(const Manifest& m) {
   std::uint64_t n = 0;
@@ -65,6 +53,8 @@ nlohmann::json report_json(const bake::BakeReport& r, const std::string& output)
           {"stage_seconds", m.stage_seconds},
           {"stats", m.stats}};
 }
+
+}  // namespace
 
 int run_bake(const BakeArgs& args, const CommandContext& context) {
   Result<std::uint64_t> memory = parse_byte_size(args.memory);
@@ -118,43 +108,5 @@ int run_bake(const BakeArgs& args, const CommandContext& context) {
   return 0;
 }
 
-}  // namespace
-
-void add_bake_command(CLI::App& app, CommandContext& context) {
-  auto args = std::make_shared<BakeArgs>();
-  CLI::App* command = app.add_subcommand(
-      "bake", "Bake a PLY mesh into an on-disk LOD octree directory (bounded memory)");
-  command->add_option("input", args->input, "Input .ply file")->required();
-  command->add_option("-o,--output", args->output,
-                      "Output directory (created; an earlier bake there is replaced atomically)")
-      ->required();
-  command
-      ->add_option("--max-tris", args->max_tris,
-                   "A node splits while it holds more triangles than this")
-      ->capture_default_str()
-      ->check(CLI::Range(1u, 1u << 30));
-  command
-      ->add_option("--max-depth", args->max_depth,
-                   "Deepest octree level (root = 0); leaves there keep all their triangles")
-      ->capture_default_str()
-      ->check(CLI::Range(0u, 21u));
-  command
-      ->add_option("--memory", args->memory,
-                   "Memory budget for the whole bake: 16M, 64M, 1G (peak RSS ~ this + a few MB)")
-      ->capture_default_str();
-  command->add_option("--work-dir", args->work_dir,
-                      "Directory for temporary files (default: next to the output)");
-  command->add_option("--threads", args->threads, "Worker threads (default: all cores)");
-  command
-      ->add_option("--method", args->method,
-                   "Clustering of the LODs: grid (cells inside each node) or bade2006 (the "
-                   "seed's one representative per node); none: leaves keep only their original "
-                   "triangles")
-      ->capture_default_str()
-      ->check(CLI::IsMember({"grid", "bade2006", "none"}));
-  command->add_flag("--out-of-core", args->out_of_core,
-                    "Take the out-of-core soup path even when the vertices fit the budget");
-  command->callback([args, &context] { context.exit_code = run_bake(*args, context); });
-}
 
 }  // namespace octolod::cli

@@ -11,11 +11,11 @@
 #include <cstdio>
 #include <filesystem>
 #include <limits>
-#include <memory>
 #include <string>
 #include <vector>
 
 #include "command.h"
+#include "commands.h"
 #include "mesh_file.h"
 #include "metro_json.h"
 #include "octolod/formats/manifest.h"
@@ -26,16 +26,6 @@
 
 namespace octolod::cli {
 namespace {
-
-struct CompareArgs {
-  std::string input;
-  std::string tree;
-  std::vector<double> errors;
-  std::vector<double> fractions{0.3, 0.1, 0.03, 0.01};
-  std::uint64_t samples = 0;
-  bool markdown = false;
-  bool no_reference = false;
-};
 
 struct Row {
   double error_target = 0;        // model units
@@ -174,6 +164,8 @@ nlohmann::json rows_json(const std::vector<Row>& rows, const Manifest& manifest,
   return out;
 }
 
+}  // namespace
+
 int run_compare(const CompareArgs& args, const CommandContext& context) {
   for (double e : args.errors)
     if (!(e >= 0 && std::isfinite(e)))
@@ -277,37 +269,5 @@ int run_compare(const CompareArgs& args, const CommandContext& context) {
   return 0;
 }
 
-}  // namespace
-
-void add_compare_command(CLI::App& app, CommandContext& context) {
-  auto args = std::make_shared<CompareArgs>();
-  CLI::App* command = app.add_subcommand(
-      "compare",
-      "Uniform cuts of a baked tree vs its input, next to the QSlim-style reference at the same "
-      "triangle counts (two-sided RMS and Hausdorff)");
-  command->add_option("input", args->input, "The .ply the tree was baked from")->required();
-  command->add_option("tree", args->tree, "Baked tree directory (holds manifest.json)")->required();
-  CLI::Option* errors =
-      command
-          ->add_option("--errors", args->errors,
-                       "Comma-separated error targets (model units), one uniform cut each")
-          ->delimiter(',');
-  command
-      ->add_option("--fractions", args->fractions,
-                   "Without --errors: cuts closest to these fractions of the input's triangles, "
-                   "chosen among the tree's stored LOD errors")
-      ->delimiter(',')
-      ->capture_default_str()
-      ->excludes(errors);
-  command
-      ->add_option("--samples", args->samples,
-                   "Metro samples per direction; 0 = 10 per triangle, 100K..1M")
-      ->capture_default_str();
-  command->add_flag("--markdown", args->markdown, "Print the table as Markdown");
-  command->add_flag("--no-reference", args->no_reference,
-                    "Skip the reference decimation (the cut columns only; much faster on "
-                    "large inputs)");
-  command->callback([args, &context] { context.exit_code = run_compare(*args, context); });
-}
 
 }  // namespace octolod::cli

@@ -6,10 +6,10 @@
 //
 // Exit codes: 1 usage, 2 a file is malformed or has no triangles/area, 4 a file cannot be read.
 #include <cstdio>
-#include <memory>
 #include <string>
 
 #include "command.h"
+#include "commands.h"
 #include "mesh_file.h"
 #include "metro_json.h"
 #include "octolod/measure/metro.h"
@@ -17,14 +17,6 @@
 
 namespace octolod::cli {
 namespace {
-
-struct EvalArgs {
-  std::string a;
-  std::string b;
-  std::uint64_t samples = 0;
-  std::uint64_t seed = 1;
-  unsigned threads = 0;
-};
 
 void print_deviation(const char* name, const measure::Deviation& d) {
   std::printf("%-9s %9llu  mean %.6g (%.4f%%)  rms %.6g (%.4f%%)  max %.6g (%.4f%%)\n", name,
@@ -36,6 +28,8 @@ void print_deviation(const char* name, const measure::Deviation& d) {
   if (d.compared.color) std::printf("%-9s colour rms %.6g\n", "", d.color_rms);
   if (d.compared.uv) std::printf("%-9s uv rms %.6g\n", "", d.uv_rms);
 }
+
+}  // namespace
 
 int run_eval(const EvalArgs& args, const CommandContext& context) {
   Progress progress(context);
@@ -80,26 +74,5 @@ int run_eval(const EvalArgs& args, const CommandContext& context) {
   return 0;
 }
 
-}  // namespace
-
-void add_eval_command(CLI::App& app, CommandContext& context) {
-  auto args = std::make_shared<EvalArgs>();
-  CLI::App* command = app.add_subcommand(
-      "eval", "Metro-style distance between two meshes: mean, RMS, max (Hausdorff) both ways, "
-              "plus normal/colour/uv deviation");
-  command->add_option("a", args->a, "First mesh (.ply); relative numbers use its diagonal")
-      ->required();
-  command->add_option("b", args->b, "Second mesh (.ply)")->required();
-  command
-      ->add_option("--samples", args->samples,
-                   "Samples per direction; 0 = 10 per triangle of the sampled mesh, "
-                   "100K..1M")
-      ->capture_default_str();
-  command->add_option("--seed", args->seed, "Sample generator seed (same seed, same numbers)")
-      ->capture_default_str();
-  command->add_option("--threads", args->threads,
-                      "Query threads (default: all cores; the numbers do not depend on it)");
-  command->callback([args, &context] { context.exit_code = run_eval(*args, context); });
-}
 
 }  // namespace octolod::cli

@@ -4,11 +4,11 @@
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
-#include <memory>
 #include <string>
 #include <vector>
 
 #include "command.h"
+#include "commands.h"
 #include "octolod/formats/gltf.h"
 #include "octolod/formats/manifest.h"
 #include "cut_choice.h"
@@ -17,18 +17,12 @@
 namespace octolod::cli {
 namespace {
 
-struct ExportArgs {
-  std::string tree;
-  CutChoice cut;
-  std::string output;
-  bool draco = false;
-  DracoOptions draco_options;
-};
-
 // "root/lod1", "3/5/lod0": the node's directory and the LOD index.
 std::string mesh_name(const NodeInfo& node, std::uint32_t lod) {
   return (node.path.empty() ? std::string("root") : node.path) + "/lod" + std::to_string(lod);
 }
+
+}  // namespace
 
 int run_export(const ExportArgs& args, const CommandContext& context) {
   const auto start = std::chrono::steady_clock::now();
@@ -78,31 +72,5 @@ int run_export(const ExportArgs& args, const CommandContext& context) {
   return 0;
 }
 
-}  // namespace
-
-void add_export_command(CLI::App& app, CommandContext& context) {
-  auto args = std::make_shared<ExportArgs>();
-  CLI::App* command = app.add_subcommand(
-      "export", "Write a uniform cut of a baked tree as glTF/GLB, one mesh per node LOD");
-  command->add_option("tree", args->tree, "Baked tree directory (holds manifest.json)")->required();
-  add_cut_options(*command, args->cut);
-  command->add_option("-o,--output", args->output, "Output file: .glb, or .gltf for embedded JSON")
-      ->required();
-  CLI::Option* draco = command->add_flag(
-      "--draco", args->draco,
-      "Compress with Draco (KHR_draco_mesh_compression; lossy, see --position-bits)");
-  command
-      ->add_option("--position-bits", args->draco_options.position_bits,
-                   "Draco position quantization bits (1..30) over the cut's bounding cube")
-      ->capture_default_str()
-      ->needs(draco);
-  command->callback([args, &context] {
-    if (const Status choice = check_cut_choice(args->cut, "export"); !choice.ok()) {
-      context.exit_code = report(choice);
-      return;
-    }
-    context.exit_code = run_export(*args, context);
-  });
-}
 
 }  // namespace octolod::cli

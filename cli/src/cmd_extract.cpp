@@ -8,11 +8,11 @@
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
-#include <memory>
 #include <string>
 #include <vector>
 
 #include "command.h"
+#include "commands.h"
 #include "mesh_file.h"
 #include "octolod/formats/manifest.h"
 #include "progress.h"
@@ -20,14 +20,6 @@
 #include "tree_cut.h"
 
 namespace octolod::cli {
-namespace {
-
-struct ExtractArgs {
-  std::string tree;
-  CutChoice cut;
-  std::string output;
-  bool ascii = false;
-};
 
 int run_extract(const ExtractArgs& args, const CommandContext& context) {
   const auto start = std::chrono::steady_clock::now();
@@ -81,24 +73,5 @@ int run_extract(const ExtractArgs& args, const CommandContext& context) {
   return 0;
 }
 
-}  // namespace
-
-void add_extract_command(CLI::App& app, CommandContext& context) {
-  auto args = std::make_shared<ExtractArgs>();
-  CLI::App* command = app.add_subcommand(
-      "extract", "Write the mesh of a uniform cut of a baked tree as one welded PLY");
-  command->add_option("tree", args->tree, "Baked tree directory (holds manifest.json)")->required();
-  add_cut_options(*command, args->cut);
-  command->add_option("-o,--output", args->output, "Output .ply file (written atomically)")
-      ->required();
-  command->add_flag("--ascii", args->ascii, "Write ascii PLY (default: binary little-endian)");
-  command->callback([args, &context] {
-    if (const Status choice = check_cut_choice(args->cut, "extract"); !choice.ok()) {
-      context.exit_code = report(choice);
-      return;
-    }
-    context.exit_code = run_extract(*args, context);
-  });
-}
 
 }  // namespace octolod::cli

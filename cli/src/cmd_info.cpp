@@ -5,12 +5,12 @@
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
-#include <memory>
 #include <string>
 #include <system_error>
 #include <vector>
 
 #include "command.h"
+#include "commands.h"
 #include "octolod/formats/manifest.h"
 
 namespace octolod::cli {
@@ -131,6 +131,8 @@ void print_levels(const char* title, const char* key, const std::vector<LodLevel
   }
 }
 
+}  // namespace
+
 int run_info(const std::string& tree, const CommandContext& context) {
   const std::filesystem::path path = std::filesystem::path(tree) / kManifestFileName;
   Result<Manifest> manifest = read_manifest(path);
@@ -212,14 +214,5 @@ int run_info(const std::string& tree, const CommandContext& context) {
   return 0;
 }
 
-}  // namespace
-
-void add_info_command(CLI::App& app, CommandContext& context) {
-  auto tree = std::make_shared<std::string>();
-  CLI::App* command =
-      app.add_subcommand("info", "Summarize a baked tree: nodes, leaves, LODs (triangles, errors), sizes, parameters, times");
-  command->add_option("tree", *tree, "Baked tree directory (holds manifest.json)")->required();
-  command->callback([tree, &context] { context.exit_code = run_info(*tree, context); });
-}
 
 }  // namespace octolod::cli

@@ -5,23 +5,15 @@
 // Exit codes: 1 usage, 2 malformed input or no triangles, 4 the input cannot be read or the
 // output written (nothing is left behind then).
 #include <cstdio>
-#include <memory>
 #include <string>
 
 #include "command.h"
+#include "commands.h"
 #include "mesh_file.h"
 #include "octolod/measure/reference.h"
 #include "progress.h"
 
 namespace octolod::cli {
-namespace {
-
-struct ReferenceArgs {
-  std::string input;
-  std::uint32_t triangles = 0;
-  std::string output;
-  bool ascii = false;
-};
 
 int run_reference(const ReferenceArgs& args, const CommandContext& context) {
   Progress progress(context);
@@ -67,24 +59,5 @@ int run_reference(const ReferenceArgs& args, const CommandContext& context) {
   return 0;
 }
 
-}  // namespace
-
-void add_reference_command(CLI::App& app, CommandContext& context) {
-  auto args = std::make_shared<ReferenceArgs>();
-  CLI::App* command = app.add_subcommand(
-      "reference",
-      "QSlim-style reference simplification (OpenMesh Decimater, quadrics + normal-flip guard)");
-  command->add_option("input", args->input, "Input mesh (.ply)")->required();
-  command
-      ->add_option("--triangles", args->triangles,
-                   "Target triangle count (reached exactly or one below on closed meshes; "
-                   "boundaries and non-manifold parts can stop above it)")
-      ->required()
-      ->check(CLI::Range(1u, 0xFFFFFFFFu));
-  command->add_option("-o,--output", args->output, "Output .ply file (written atomically)")
-      ->required();
-  command->add_flag("--ascii", args->ascii, "Write ascii PLY (default: binary little-endian)");
-  command->callback([args, &context] { context.exit_code = run_reference(*args, context); });
-}
 
 }  // namespace octolod::cli

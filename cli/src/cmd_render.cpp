@@ -13,6 +13,7 @@
 #include <glm/glm.hpp>
 
 #include "command.h"
+#include "commands.h"
 #include "frame_render.h"
 #include "offscreen_renderer.h"
 #include "octolod/runtime/streaming_tree.h"
@@ -20,20 +21,6 @@
 
 namespace octolod::cli {
 namespace {
-
-struct RenderArgs {
-  std::string tree;
-  std::string camera;  // "ex,ey,ez,tx,ty,tz", empty: framing_camera
-  double fov_degrees = 60.0;
-  int width = 1024;
-  int height = 768;
-  // Coarser than the runtime's 2 px default: a picture exists to show which LODs the cut is made
-  // of, and at 2 px the framed demo rock (samples/rock_small.ply, 40K triangles) is drawn
-  // entirely from its leaves' original triangles, one tint; at 4 px it mixes two detail levels.
-  double sse = 4.0;
-  std::string budget = "512M";
-  std::string output;
-};
 
 // Updates until a frame neither issues nor waits for a load. Each update installs what the
 // previous run_pending() loaded and queues at most max_loads_in_flight more, so a cut of n node
@@ -71,6 +58,8 @@ struct LevelCount {
   std::uint64_t nodes = 0;
   std::uint64_t triangles = 0;
 };
+
+}  // namespace
 
 int run_render(const RenderArgs& args, const CommandContext& context) {
   Result<std::uint64_t> budget = parse_byte_size(args.budget);
@@ -186,23 +175,5 @@ int run_render(const RenderArgs& args, const CommandContext& context) {
   return 0;
 }
 
-}  // namespace
-
-void add_render_command(CLI::App& app, CommandContext& context) {
-  auto args = std::make_shared<RenderArgs>();
-  CLI::App* command = app.add_subcommand(
-      "render", "Render a baked tree as the streaming runtime selects it, nodes tinted by detail level (PNG)");
-  command->add_option("tree", args->tree, "Baked tree directory (holds manifest.json)")->required();
-  command->add_option("-o,--output", args->output, "PNG file to write (atomically)")->required();
-  command->add_option("--camera", args->camera,
-                      "eye_x,eye_y,eye_z,target_x,target_y,target_z in model units (default: frame the whole model)");
-  command->add_option("--fov", args->fov_degrees, "Vertical field of view in degrees")->capture_default_str();
-  command->add_option("--width", args->width, "Picture width in pixels")->capture_default_str();
-  command->add_option("--height", args->height, "Picture height in pixels (the SSE viewport)")->capture_default_str();
-  command->add_option("--sse", args->sse, "Screen-space error target in pixels of the picture's height")
-      ->capture_default_str();
-  command->add_option("--budget", args->budget, "Cache budget: 8M, 512K, 1G")->capture_default_str();
-  command->callback([args, &context] { context.exit_code = run_render(*args, context); });
-}
 
 }  // namespace octolod::cli

@@ -9,20 +9,11 @@
 #include <thread>
 
 #include "command.h"
+#include "commands.h"
 #include "octolod/samplegen/sample_generator.h"
 #include "progress.h"
 
 namespace octolod::cli {
-namespace {
-
-struct SampleArgs {
-  std::string shape;
-  std::string triangles;
-  std::string attributes = "normal,color,uv";
-  std::uint64_t seed = 1;
-  bool ascii = false;
-  std::string output;
-};
 
 int run_sample(const SampleArgs& args, const CommandContext& context) {
   using namespace octolod::samplegen;
@@ -72,26 +63,5 @@ int run_sample(const SampleArgs& args, const CommandContext& context) {
   return 0;
 }
 
-}  // namespace
-
-void add_sample_command(CLI::App& app, CommandContext& context) {
-  auto args = std::make_shared<SampleArgs>();
-  CLI::App* command = app.add_subcommand(
-      "sample", "Write a deterministic procedural mesh (streaming, bounded memory for any size)");
-  command->add_option("--shape", args->shape, "rock | terrain | city")->required();
-  command
-      ->add_option("--triangles", args->triangles,
-                   "About this many triangles: 200000, 2e5, 200K, 20M")
-      ->required();
-  command
-      ->add_option("--attributes", args->attributes,
-                   "Comma-separated subset of normal,color,uv; 'none' for positions only")
-      ->capture_default_str();
-  command->add_option("--seed", args->seed, "Noise seed; same seed, same bytes")
-      ->capture_default_str();
-  command->add_flag("--ascii", args->ascii, "Write ascii PLY (default: binary little-endian)");
-  command->add_option("-o,--output", args->output, "Output .ply file")->required();
-  command->callback([args, &context] { context.exit_code = run_sample(*args, context); });
-}
 
 }  // namespace octolod::cli

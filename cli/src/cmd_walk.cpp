@@ -15,6 +15,7 @@
 #include <glm/glm.hpp>
 
 #include "command.h"
+#include "commands.h"
 #include "frame_render.h"
 #include "image.h"
 #include "line_chart.h"
@@ -24,22 +25,6 @@
 
 namespace octolod::cli {
 namespace {
-
-struct WalkArgs {
-  std::string tree;
-  std::string path = "orbit";
-  std::uint32_t frames = 600;
-  std::string budget = "64M";
-  double sse = 2.0;
-  double fps = 60.0;
-  unsigned threads = 2;
-  std::uint32_t loads_in_flight = runtime::StreamingOptions{}.max_loads_in_flight;
-  bool no_prefetch = false;
-  std::string csv;
-  std::string plot;
-  std::string frames_png;
-  std::uint32_t frames_png_every = 100;
-};
 
 // Selection runs for a 1920x1080 view with a 60 degree vertical field of view; --frames-png
 // pictures are rendered at half that size with the same projection.
@@ -140,6 +125,8 @@ void write_csv_row(std::ofstream& csv, std::uint32_t frame, const runtime::Frame
       << s.fallbacks << ',' << s.holes << ',' << s.coarsening << ',' << s.selection_ms << ','
       << s.selection_cpu_ms << '\n';
 }
+
+}  // namespace
 
 int run_walk(const WalkArgs& args, const CommandContext& context) {
   Result<std::uint64_t> budget = parse_byte_size(args.budget);
@@ -315,35 +302,5 @@ int run_walk(const WalkArgs& args, const CommandContext& context) {
   return 0;
 }
 
-}  // namespace
-
-void add_walk_command(CLI::App& app, CommandContext& context) {
-  auto args = std::make_shared<WalkArgs>();
-  CLI::App* command = app.add_subcommand(
-      "walk", "Replay a camera path against a baked tree with the streaming runtime; paging statistics");
-  command->add_option("tree", args->tree, "Baked tree directory (holds manifest.json)")->required();
-  command
-      ->add_option("--path", args->path,
-                   "orbit | far-to-near | flythrough | FILE.json ({\"keyframes\": [{\"eye\": [x,y,z], "
-                   "\"target\": [x,y,z]}, ...]}, model units)")
-      ->capture_default_str();
-  command->add_option("--frames", args->frames, "Frames to replay")->capture_default_str();
-  command->add_option("--budget", args->budget, "Cache budget: 8M, 512K, 1G")->capture_default_str();
-  command->add_option("--sse", args->sse, "Screen-space error target in pixels (1080 px viewport)")
-      ->capture_default_str();
-  command->add_option("--fps", args->fps, "Frame rate of the replay; 0 = as fast as possible")
-      ->capture_default_str();
-  command->add_option("--threads", args->threads, "Loader threads")->capture_default_str();
-  command->add_option("--loads-in-flight", args->loads_in_flight, "Loads queued or running at once")
-      ->capture_default_str();
-  command->add_flag("--no-prefetch", args->no_prefetch, "Load only what frames want");
-  command->add_option("--csv", args->csv, "Write per-frame statistics to this CSV file");
-  command->add_option("--plot", args->plot, "Write per-frame charts to this PNG file");
-  command->add_option("--frames-png", args->frames_png,
-                      "Render selected frames (960x540, nodes tinted by detail level) into DIR/frame_NNNNNN.png");
-  command->add_option("--frames-png-every", args->frames_png_every, "With --frames-png: every K-th frame, from frame 0")
-      ->capture_default_str();
-  command->callback([args, &context] { context.exit_code = run_walk(*args, context); });
-}
 
 }  // namespace octolod::cli

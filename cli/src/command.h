@@ -1,9 +1,7 @@
-// The frame every subcommand plugs into. A subcommand file defines one
-//   void add_<name>_command(CLI::App& app, CommandContext& context);
-// that adds a CLI11 subcommand whose callback stores its exit code in context.exit_code.
+// What every subcommand shares: the global flags and the helpers that report results and errors
+// (commands.h lists the subcommands, command_line.cpp declares their options).
 #pragma once
 
-#include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
 #include <string>
@@ -26,18 +24,5 @@ void print_json(const nlohmann::json& document);
 Result<std::uint64_t> parse_byte_size(const std::string& text);
 // Size in bytes of a file a command has just written (for its summary); io error naming it.
 Result<std::uint64_t> written_file_size(const std::string& path);
-
-void add_sample_command(CLI::App& app, CommandContext& context);
-void add_walk_command(CLI::App& app, CommandContext& context);
-void add_export_command(CLI::App& app, CommandContext& context);
-void add_bake_command(CLI::App& app, CommandContext& context);
-void add_info_command(CLI::App& app, CommandContext& context);
-void add_extract_command(CLI::App& app, CommandContext& context);
-void add_eval_command(CLI::App& app, CommandContext& context);
-void add_reference_command(CLI::App& app, CommandContext& context);
-void add_compare_command(CLI::App& app, CommandContext& context);
-void add_render_command(CLI::App& app, CommandContext& context);
-
-
 
 }  // namespace octolod::cli

@@ -6,15 +6,6 @@
 
 namespace octolod::cli {
 
-void add_cut_options(CLI::App& command, CutChoice& choice) {
-  CLI::Option* error =
-      command.add_option("--error", choice.error,
-                         "Per node, the coarsest LOD whose stored error is <= E (model units)");
-  CLI::Option* level = command.add_option(
-      "--level", choice.level, "The nodes at octree depth K (and leaves above it), finest LOD each");
-  error->excludes(level);
-}
-
 Status check_cut_choice(const CutChoice& choice, std::string_view command_name) {
   if (choice.error.has_value() == choice.level.has_value())
     return usage_error(std::string(command_name) + ": give exactly one of --error E or --level K");

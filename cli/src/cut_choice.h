@@ -2,8 +2,6 @@
 // `octolod export` (tree_cut.h computes the cuts).
 #pragma once
 
-#include <CLI/CLI.hpp>
-
 #include <cstdint>
 #include <optional>
 #include <string_view>
@@ -19,10 +17,6 @@ struct CutChoice {
   std::optional<double> error;         // model units: per node the coarsest LOD with error <= E
   std::optional<std::uint32_t> level;  // octree depth, root = 0
 };
-
-// Adds the mutually exclusive --error and --level options, stored into `choice` (which must
-// outlive the parse).
-void add_cut_options(CLI::App& command, CutChoice& choice);
 
 // usage error (prefixed with `command_name`) unless exactly one of the two was given and the
 // error is a finite distance >= 0.

@@ -6,7 +6,10 @@
 #include <iostream>
 #include <system_error>
 
+#include <CLI/CLI.hpp>
+
 #include "command.h"
+#include "command_line.h"
 
 namespace octolod::cli {
 
@@ -57,18 +60,7 @@ int main(int argc, char** argv) {
   app.add_flag("--json", context.json, "Machine-readable output: one JSON document on stdout");
   app.add_flag("--progress", context.progress,
                "Human progress on stderr (default: only when stderr is a terminal)");
-  add_sample_command(app, context);
-  add_walk_command(app, context);
-  add_export_command(app, context);
-  add_bake_command(app, context);
-  add_info_command(app, context);
-  add_extract_command(app, context);
-  add_eval_command(app, context);
-  add_reference_command(app, context);
-  add_compare_command(app, context);
-  add_render_command(app, context);
-
-
+  add_commands(app, context);
 
   try {
     app.parse(argc, argv);

@@ -1,0 +1,266 @@
+// Every subcommand's options, help text and checks, declared with CLI11. The only file besides
+// main.cpp that includes CLI11: Debian's CLI11 2.1 is header-only and instantiating it costs
+// ~15-20 s of compile time per file, once per build type, so the commands themselves
+// (cmd_<name>.cpp) take plain argument structs (commands.h).
+#include "command_line.h"
+
+#include <CLI/CLI.hpp>
+
+#include <memory>
+#include <string>
+
+#include "commands.h"
+
+namespace octolod::cli {
+namespace {
+
+// The mutually exclusive --error and --level options of a uniform cut, stored into `choice`
+// (which must outlive the parse); check_cut_choice checks them once parsed.
+void add_cut_options(CLI::App& command, CutChoice& choice) {
+  CLI::Option* error =
+      command.add_option("--error", choice.error,
+                         "Per node, the coarsest LOD whose stored error is <= E (model units)");
+  CLI::Option* level = command.add_option(
+      "--level", choice.level, "The nodes at octree depth K (and leaves above it), finest LOD each");
+  error->excludes(level);
+}
+
+void add_bake_command(CLI::App& app, CommandContext& context) {
+  auto args = std::make_shared<BakeArgs>();
+  CLI::App* command = app.add_subcommand(
+      "bake", "Bake a PLY mesh into an on-disk LOD octree directory (bounded memory)");
+  command->add_option("input", args->input, "Input .ply file")->required();
+  command->add_option("-o,--output", args->output,
+                      "Output directory (created; an earlier bake there is replaced atomically)")
+      ->required();
+  command
+      ->add_option("--max-tris", args->max_tris,
+                   "A node splits while it holds more triangles than this")
+      ->capture_default_str()
+      ->check(CLI::Range(1u, 1u << 30));
+  command
+      ->add_option("--max-depth", args->max_depth,
+                   "Deepest octree level (root = 0); leaves there keep all their triangles")
+      ->capture_default_str()
+      ->check(CLI::Range(0u, 21u));
+  command
+      ->add_option("--memory", args->memory,
+                   "Memory budget for the whole bake: 16M, 64M, 1G (peak RSS ~ this + a few MB)")
+      ->capture_default_str();
+  command->add_option("--work-dir", args->work_dir,
+                      "Directory for temporary files (default: next to the output)");
+  command->add_option("--threads", args->threads, "Worker threads (default: all cores)");
+  command
+      ->add_option("--method", args->method,
+                   "Clustering of the LODs: grid (cells inside each node) or bade2006 (the "
+                   "seed's one representative per node); none: leaves keep only their original "
+                   "triangles")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"grid", "bade2006", "none"}));
+  command->add_flag("--out-of-core", args->out_of_core,
+                    "Take the out-of-core soup path even when the vertices fit the budget");
+  command->callback([args, &context] { context.exit_code = run_bake(*args, context); });
+}
+
+void add_compare_command(CLI::App& app, CommandContext& context) {
+  auto args = std::make_shared<CompareArgs>();
+  CLI::App* command = app.add_subcommand(
+      "compare",
+      "Uniform cuts of a baked tree vs its input, next to the QSlim-style reference at the same "
+      "triangle counts (two-sided RMS and Hausdorff)");
+  command->add_option("input", args->input, "The .ply the tree was baked from")->required();
+  command->add_option("tree", args->tree, "Baked tree directory (holds manifest.json)")->required();
+  CLI::Option* errors =
+      command
+          ->add_option("--errors", args->errors,
+                       "Comma-separated error targets (model units), one uniform cut each")
+          ->delimiter(',');
+  command
+      ->add_option("--fractions", args->fractions,
+                   "Without --errors: cuts closest to these fractions of the input's triangles, "
+                   "chosen among the tree's stored LOD errors")
+      ->delimiter(',')
+      ->capture_default_str()
+      ->excludes(errors);
+  command
+      ->add_option("--samples", args->samples,
+                   "Metro samples per direction; 0 = 10 per triangle, 100K..1M")
+      ->capture_default_str();
+  command->add_flag("--markdown", args->markdown, "Print the table as Markdown");
+  command->add_flag("--no-reference", args->no_reference,
+                    "Skip the reference decimation (the cut columns only; much faster on "
+                    "large inputs)");
+  command->callback([args, &context] { context.exit_code = run_compare(*args, context); });
+}
+
+void add_eval_command(CLI::App& app, CommandContext& context) {
+  auto args = std::make_shared<EvalArgs>();
+  CLI::App* command = app.add_subcommand(
+      "eval", "Metro-style distance between two meshes: mean, RMS, max (Hausdorff) both ways, "
+              "plus normal/colour/uv deviation");
+  command->add_option("a", args->a, "First mesh (.ply); relative numbers use its diagonal")
+      ->required();
+  command->add_option("b", args->b, "Second mesh (.ply)")->required();
+  command
+      ->add_option("--samples", args->samples,
+                   "Samples per direction; 0 = 10 per triangle of the sampled mesh, "
+                   "100K..1M")
+      ->capture_default_str();
+  command->add_option("--seed", args->seed, "Sample generator seed (same seed, same numbers)")
+      ->capture_default_str();
+  command->add_option("--threads", args->threads,
+                      "Query threads (default: all cores; the numbers do not depend on it)");
+  command->callback([args, &context] { context.exit_code = run_eval(*args, context); });
+}
+
+void add_export_command(CLI::App& app, CommandContext& context) {
+  auto args = std::make_shared<ExportArgs>();
+  CLI::App* command = app.add_subcommand(
+      "export", "Write a uniform cut of a baked tree as glTF/GLB, one mesh per node LOD");
+  command->add_option("tree", args->tree, "Baked tree directory (holds manifest.json)")->required();
+  add_cut_options(*command, args->cut);
+  command->add_option("-o,--output", args->output, "Output file: .glb, or .gltf for embedded JSON")
+      ->required();
+  CLI::Option* draco = command->add_flag(
+      "--draco", args->draco,
+      "Compress with Draco (KHR_draco_mesh_compression; lossy, see --position-bits)");
+  command
+      ->add_option("--position-bits", args->draco_options.position_bits,
+                   "Draco position quantization bits (1..30) over the cut's bounding cube")
+      ->capture_default_str()
+      ->needs(draco);
+  command->callback([args, &context] {
+    if (const Status choice = check_cut_choice(args->cut, "export"); !choice.ok()) {
+      context.exit_code = report(choice);
+      return;
+    }
+    context.exit_code = run_export(*args, context);
+  });
+}
+
+void add_extract_command(CLI::App& app, CommandContext& context) {
+  auto args = std::make_shared<ExtractArgs>();
+  CLI::App* command = app.add_subcommand(
+      "extract", "Write the mesh of a uniform cut of a baked tree as one welded PLY");
+  command->add_option("tree", args->tree, "Baked tree directory (holds manifest.json)")->required();
+  add_cut_options(*command, args->cut);
+  command->add_option("-o,--output", args->output, "Output .ply file (written atomically)")
+      ->required();
+  command->add_flag("--ascii", args->ascii, "Write ascii PLY (default: binary little-endian)");
+  command->callback([args, &context] {
+    if (const Status choice = check_cut_choice(args->cut, "extract"); !choice.ok()) {
+      context.exit_code = report(choice);
+      return;
+    }
+    context.exit_code = run_extract(*args, context);
+  });
+}
+
+void add_info_command(CLI::App& app, CommandContext& context) {
+  auto tree = std::make_shared<std::string>();
+  CLI::App* command =
+      app.add_subcommand("info", "Summarize a baked tree: nodes, leaves, LODs (triangles, errors), sizes, parameters, times");
+  command->add_option("tree", *tree, "Baked tree directory (holds manifest.json)")->required();
+  command->callback([tree, &context] { context.exit_code = run_info(*tree, context); });
+}
+
+void add_reference_command(CLI::App& app, CommandContext& context) {
+  auto args = std::make_shared<ReferenceArgs>();
+  CLI::App* command = app.add_subcommand(
+      "reference",
+      "QSlim-style reference simplification (OpenMesh Decimater, quadrics + normal-flip guard)");
+  command->add_option("input", args->input, "Input mesh (.ply)")->required();
+  command
+      ->add_option("--triangles", args->triangles,
+                   "Target triangle count (reached exactly or one below on closed meshes; "
+                   "boundaries and non-manifold parts can stop above it)")
+      ->required()
+      ->check(CLI::Range(1u, 0xFFFFFFFFu));
+  command->add_option("-o,--output", args->output, "Output .ply file (written atomically)")
+      ->required();
+  command->add_flag("--ascii", args->ascii, "Write ascii PLY (default: binary little-endian)");
+  command->callback([args, &context] { context.exit_code = run_reference(*args, context); });
+}
+
+void add_render_command(CLI::App& app, CommandContext& context) {
+  auto args = std::make_shared<RenderArgs>();
+  CLI::App* command = app.add_subcommand(
+      "render", "Render a baked tree as the streaming runtime selects it, nodes tinted by detail level (PNG)");
+  command->add_option("tree", args->tree, "Baked tree directory (holds manifest.json)")->required();
+  command->add_option("-o,--output", args->output, "PNG file to write (atomically)")->required();
+  command->add_option("--camera", args->camera,
+                      "eye_x,eye_y,eye_z,target_x,target_y,target_z in model units (default: frame the whole model)");
+  command->add_option("--fov", args->fov_degrees, "Vertical field of view in degrees")->capture_default_str();
+  command->add_option("--width", args->width, "Picture width in pixels")->capture_default_str();
+  command->add_option("--height", args->height, "Picture height in pixels (the SSE viewport)")->capture_default_str();
+  command->add_option("--sse", args->sse, "Screen-space error target in pixels of the picture's height")
+      ->capture_default_str();
+  command->add_option("--budget", args->budget, "Cache budget: 8M, 512K, 1G")->capture_default_str();
+  command->callback([args, &context] { context.exit_code = run_render(*args, context); });
+}
+
+void add_sample_command(CLI::App& app, CommandContext& context) {
+  auto args = std::make_shared<SampleArgs>();
+  CLI::App* command = app.add_subcommand(
+      "sample", "Write a deterministic procedural mesh (streaming, bounded memory for any size)");
+  command->add_option("--shape", args->shape, "rock | terrain | city")->required();
+  command
+      ->add_option("--triangles", args->triangles,
+                   "About this many triangles: 200000, 2e5, 200K, 20M")
+      ->required();
+  command
+      ->add_option("--attributes", args->attributes,
+                   "Comma-separated subset of normal,color,uv; 'none' for positions only")
+      ->capture_default_str();
+  command->add_option("--seed", args->seed, "Noise seed; same seed, same bytes")
+      ->capture_default_str();
+  command->add_flag("--ascii", args->ascii, "Write ascii PLY (default: binary little-endian)");
+  command->add_option("-o,--output", args->output, "Output .ply file")->required();
+  command->callback([args, &context] { context.exit_code = run_sample(*args, context); });
+}
+
+void add_walk_command(CLI::App& app, CommandContext& context) {
+  auto args = std::make_shared<WalkArgs>();
+  CLI::App* command = app.add_subcommand(
+      "walk", "Replay a camera path against a baked tree with the streaming runtime; paging statistics");
+  command->add_option("tree", args->tree, "Baked tree directory (holds manifest.json)")->required();
+  command
+      ->add_option("--path", args->path,
+                   "orbit | far-to-near | flythrough | FILE.json ({\"keyframes\": [{\"eye\": [x,y,z], "
+                   "\"target\": [x,y,z]}, ...]}, model units)")
+      ->capture_default_str();
+  command->add_option("--frames", args->frames, "Frames to replay")->capture_default_str();
+  command->add_option("--budget", args->budget, "Cache budget: 8M, 512K, 1G")->capture_default_str();
+  command->add_option("--sse", args->sse, "Screen-space error target in pixels (1080 px viewport)")
+      ->capture_default_str();
+  command->add_option("--fps", args->fps, "Frame rate of the replay; 0 = as fast as possible")
+      ->capture_default_str();
+  command->add_option("--threads", args->threads, "Loader threads")->capture_default_str();
+  command->add_option("--loads-in-flight", args->loads_in_flight, "Loads queued or running at once")
+      ->capture_default_str();
+  command->add_flag("--no-prefetch", args->no_prefetch, "Load only what frames want");
+  command->add_option("--csv", args->csv, "Write per-frame statistics to this CSV file");
+  command->add_option("--plot", args->plot, "Write per-frame charts to this PNG file");
+  command->add_option("--frames-png", args->frames_png,
+                      "Render selected frames (960x540, nodes tinted by detail level) into DIR/frame_NNNNNN.png");
+  command->add_option("--frames-png-every", args->frames_png_every, "With --frames-png: every K-th frame, from frame 0")
+      ->capture_default_str();
+  command->callback([args, &context] { context.exit_code = run_walk(*args, context); });
+}
+
+}  // namespace
+
+void add_commands(CLI::App& app, CommandContext& context) {
+  add_sample_command(app, context);
+  add_walk_command(app, context);
+  add_export_command(app, context);
+  add_bake_command(app, context);
+  add_info_command(app, context);
+  add_extract_command(app, context);
+  add_eval_command(app, context);
+  add_reference_command(app, context);
+  add_compare_command(app, context);
+  add_render_command(app, context);
+}
+
+}  // namespace octolod::cli
