@@ -19,7 +19,7 @@ PositionIds make_position_ids(const NodeMesh& mesh) {
   auto hash = [base, stride](std::uint32_t v) {
     std::uint32_t bits[3];
     std::memcpy(bits, base + v * stride, sizeof bits);
-    return hash_mix(hash_mix(hash_mix(0, bits[0]), bits[1]), bits[2]);
+    return hash_words(bits, 3);
   };
   auto equal = [base, stride](std::uint32_t a, std::uint32_t b) {
     return std::memcmp(base + a * stride, base + b * stride, 3 * sizeof(float)) == 0;

@@ -265,13 +265,15 @@ double hausdorff_upper_bound(const NodeMesh& input, const NodeMesh& output, cons
   for (std::size_t t = 0; t < input.triangle_count(); ++t) {
     const std::uint32_t* corner = &input.indices[3 * t];
     const std::array<Vec, 3> p{input_position(corner[0]), input_position(corner[1]), input_position(corner[2])};
-    // max over the corners of the squared distance to output triangle `candidate`; stops early
-    // once it reaches `enough2` (then returns a value >= enough2, only good for taking a minimum)
+    // max over the corners of the squared distance to output triangle `candidate` where it
+    // exceeds total2 (at most total2 otherwise: a corner within total2 of one of the candidate's
+    // corners is not measured, it cannot raise the total); stops early once it reaches `enough2`
+    // (then returns a value >= enough2, only good for taking a minimum)
     auto corner_bound2 = [&](std::uint32_t candidate, double enough2) {
       const auto tri = output_triangle(candidate);
       double worst2 = 0.0;
       for (const Vec& x : p) {
-        if (near_corner(x, tri, worst2)) continue;
+        if (near_corner(x, tri, std::max(worst2, total2))) continue;
         worst2 = std::max(worst2, point_triangle_distance2(x, tri[0], tri[1], tri[2]));
         if (worst2 >= enough2) break;
       }

@@ -13,8 +13,15 @@
 
 namespace octolod::bake {
 
-inline std::uint64_t hash_mix(std::uint64_t h, std::uint64_t v) {  // splitmix64-style
-  h ^= v + 0x9E3779B97F4A7C15ull + (h << 6) + (h >> 2);
+// Hash of n 32-bit words: the words packed in pairs into 64 bits, folded by an odd multiplier,
+// then one finalizer (Stafford's Mix13, as in splitmix64) so that the low bits, which pick a
+// slot, depend on every input bit.
+inline std::uint64_t hash_words(const std::uint32_t* words, std::size_t n) {
+  constexpr std::uint64_t kOdd = 0x9E3779B97F4A7C15ull;
+  std::uint64_t h = 0;
+  std::size_t i = 0;
+  for (; i + 1 < n; i += 2) h = (h ^ (std::uint64_t{words[i]} << 32 | words[i + 1])) * kOdd;
+  if (i < n) h = (h ^ words[i]) * kOdd;
   h ^= h >> 30;
   h *= 0xBF58476D1CE4E5B9ull;
   h ^= h >> 27;
@@ -69,11 +76,7 @@ class FlatHashMap {
     for (std::size_t i = 0; i < W; ++i) equal = equal && a[i] == b[i];
     return equal;
   }
-  static std::uint64_t hash(const Key& key) {
-    std::uint64_t h = 0;
-    for (std::uint32_t word : key) h = hash_mix(h, word);
-    return h;
-  }
+  static std::uint64_t hash(const Key& key) { return hash_words(key.data(), W); }
   struct Slot {
     Key key = make_empty();
     std::uint32_t value = 0;

@@ -86,13 +86,9 @@ NodeMesh weld_identical_vertices(const NodeMesh& mesh) {
   std::vector<std::uint32_t> remap(vertex_count);
   FlatIdSet table(vertex_count);
   auto hash = [base, stride](std::uint32_t v) {
-    std::uint64_t h = 0;
-    for (std::size_t i = 0; i < stride; ++i) {
-      std::uint32_t bits;
-      std::memcpy(&bits, base + v * stride + i, 4);
-      h = hash_mix(h, bits);
-    }
-    return h;
+    std::uint32_t bits[kMaxQuadricDim];
+    std::memcpy(bits, base + v * stride, stride * 4);
+    return hash_words(bits, stride);
   };
   auto equal = [base, stride](std::uint32_t a, std::uint32_t b) {
     return std::memcmp(base + a * stride, base + b * stride, stride * 4) == 0;
