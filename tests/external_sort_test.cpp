@@ -73,7 +73,7 @@ struct SortRun {
   SortStats stats;
 };
 
-// Pushes `in` in uneven chunks, then drains the sorter.
+// Pushes `in` in uneven chunks, then drains the sorter, checking RecordSorter::keys().
 SortRun run_sorter(const std::vector<Rec>& in, const SortOptions& options) {
   SortRun run;
   auto sorter = RecordSorter::create(sizeof(Rec), sort_key_u32_at(0, sizeof(Rec)), options);
@@ -98,6 +98,11 @@ SortRun run_sorter(const std::vector<Rec>& in, const SortOptions& options) {
     const std::size_t old = run.out.size();
     run.out.resize(old + n);
     std::memcpy(run.out.data() + old, block->data(), block->size());
+    // keys() hands back each returned record's key, in core or merged.
+    const std::span<const std::uint64_t> keys = sorter.value()->keys();
+    EXPECT_EQ(keys.size(), n);
+    for (std::size_t i = 0; i < std::min(n, keys.size()); ++i)
+      EXPECT_EQ(keys[i], run.out[old + i].key) << "record " << old + i;
   }
   run.stats = sorter.value()->stats();
   return run;

@@ -140,7 +140,6 @@ class OctreeInput {
   }
 
   const RootCube& cube() const { return cube_; }
-  const SortKeyFn& key() const { return key_; }
   const OctreeBudget& budget() const { return budget_; }
   unsigned workers() const { return threads_ > 1 ? threads_ - 1 : 0; }
   bool streamed() const { return file_.empty(); }  // no soup file was written
@@ -252,7 +251,6 @@ Result<OctreeResult> build_octree(const BakeOptions& options, const SoupResult& 
   auto finished = input.finish([&](std::uint64_t done) { progress("sort", done); });
   if (!finished.ok()) return finished.status();
   RecordSorter& sorter = *finished.value();
-  const SortKeyFn& key = input.key();
   result.sort_seconds = seconds_since(start);
 
   // octree: one pass over the sorted stream decides the tree and hands out the leaves, whose
@@ -267,7 +265,6 @@ Result<OctreeResult> build_octree(const BakeOptions& options, const SoupResult& 
                           return lod_tree.add_leaf(node, builder_ptr->nodes(), std::move(records));
                         });
   builder_ptr = &builder;
-  std::vector<std::uint64_t> keys;
   std::uint64_t done = 0;
   Status streamed;
   for (;;) {
@@ -281,11 +278,9 @@ Result<OctreeResult> build_octree(const BakeOptions& options, const SoupResult& 
       break;
     }
     if (block->empty()) break;
-    keys.resize(block->size() / record_bytes);
-    key(block.value(), keys);
-    streamed = builder.push(block.value(), keys);
+    streamed = builder.push(block.value(), sorter.keys());
     if (!streamed.ok()) break;
-    done += keys.size();
+    done += block->size() / record_bytes;
     progress("octree", done);
   }
   if (streamed.ok()) streamed = builder.finish();

@@ -89,9 +89,10 @@ struct SortedRun {
 
   bool exhausted() const { return cursor[0] == size[0] && cursor[1] == size[1]; }
 
-  // Copies up to `max` records in sorted order to `out`; returns how many. Ties between the
-  // halves go to the first half (earlier input), which keeps the sort stable.
-  std::size_t emit(std::byte* out, std::size_t max) {
+  // Copies up to `max` records in sorted order to `out` (and their keys to `out_keys` unless
+  // null); returns how many. Ties between the halves go to the first half (earlier input),
+  // which keeps the sort stable.
+  std::size_t emit(std::byte* out, std::uint64_t* out_keys, std::size_t max) {
     std::size_t n = 0;
     while (n < max) {
       int h;
@@ -105,6 +106,7 @@ struct SortedRun {
       }
       std::memcpy(out + n * record_bytes,
                   records + std::size_t{order[h][cursor[h]]} * record_bytes, record_bytes);
+      if (out_keys) out_keys[n] = keys[h][cursor[h]];
       ++cursor[h];
       ++n;
     }
@@ -225,8 +227,9 @@ class KWayMerge {
 
   bool empty() const { return inputs_.empty() || inputs_[tree_[0]].done; }
 
-  // Copies up to `max` records in order to `out`; returns how many (0 only when exhausted).
-  Result<std::size_t> emit(std::byte* out, std::size_t max) {
+  // Copies up to `max` records in order to `out` (and their keys to `out_keys` unless null);
+  // returns how many (0 only when exhausted).
+  Result<std::size_t> emit(std::byte* out, std::uint64_t* out_keys, std::size_t max) {
     std::size_t n = 0;
     const std::size_t k = inputs_.size();
     while (n < max) {
@@ -234,6 +237,7 @@ class KWayMerge {
       MergeInput& in = inputs_[w];
       if (in.done) break;
       std::memcpy(out + n * record_bytes_, in.records + in.pos * record_bytes_, record_bytes_);
+      if (out_keys) out_keys[n] = in.keys[in.pos];
       ++n;
       if (++in.pos == in.count) OCTOLOD_RETURN_IF_ERROR(refill(in));
       // Replay w's path to the root.
@@ -332,6 +336,7 @@ class ExternalSorter final : public RecordSorter {
     Stopwatch watch(stats_.seconds);
     OCTOLOD_RETURN_IF_ERROR(wait_for_spill());
     out_ = PageArray<std::byte>(out_bytes_);
+    out_keys_ = PageArray<std::uint64_t>(out_bytes_ / record_bytes_);
     if (runs_.empty()) {
       // In-core fast path: one in-memory sort, no temporary file.
       stats_.in_core = true;
@@ -357,14 +362,19 @@ class ExternalSorter final : public RecordSorter {
     const std::size_t max = out_bytes_ / record_bytes_;
     std::size_t n = 0;
     if (state_ == State::in_core) {
-      n = sorted_.emit(out_.get(), max);
+      n = sorted_.emit(out_.get(), out_keys_.get(), max);
       if (sorted_.exhausted()) run_.release();
     } else {
-      auto emitted = final_.emit(out_.get(), max);
+      auto emitted = final_.emit(out_.get(), out_keys_.get(), max);
       if (!emitted.ok()) return emitted.status();
       n = emitted.value();
     }
+    out_key_count_ = n;
     return std::span<const std::byte>(out_.get(), n * record_bytes_);
+  }
+
+  std::span<const std::uint64_t> keys() const override {
+    return std::span<const std::uint64_t>(out_keys_.get(), out_key_count_);
   }
 
   const SortStats& stats() const override { return stats_; }
@@ -444,14 +454,15 @@ class ExternalSorter final : public RecordSorter {
     while (!run.exhausted()) {
       auto space = writer->reserve(SIZE_MAX);
       if (!space.ok()) return space.status();
-      writer->commit(run.emit(space->data(), space->size() / record_bytes_));
+      writer->commit(run.emit(space->data(), nullptr, space->size() / record_bytes_));
     }
     return writer->finish();
   }
 
-  // Memory left for merge inputs once the output buffer is taken.
+  // Memory left for merge inputs once the output buffer and its keys are taken.
   std::size_t merge_bytes() const {
-    return static_cast<std::size_t>(options_.memory_budget_bytes) - out_bytes_;
+    return static_cast<std::size_t>(options_.memory_budget_bytes) - out_bytes_ -
+           out_bytes_ / record_bytes_ * sizeof(std::uint64_t);
   }
   // Bytes one merge input costs with a block of `block` bytes: the block plus its keys.
   std::size_t input_cost(std::size_t block) const {
@@ -506,7 +517,7 @@ class ExternalSorter final : public RecordSorter {
     while (!merge.empty()) {
       auto space = writer->reserve(SIZE_MAX);
       if (!space.ok()) return space.status();
-      auto n = merge.emit(space->data(), space->size() / record_bytes_);
+      auto n = merge.emit(space->data(), nullptr, space->size() / record_bytes_);
       if (!n.ok()) return n.status();
       writer->commit(n.value());
       stats_.bytes_written += n.value() * record_bytes_;
@@ -534,6 +545,8 @@ class ExternalSorter final : public RecordSorter {
   std::vector<TempFile> runs_;
   KWayMerge final_;
   PageArray<std::byte> out_;
+  PageArray<std::uint64_t> out_keys_;  // keys of the records in out_
+  std::size_t out_key_count_ = 0;
   SortStats stats_;
 };
 
@@ -581,8 +594,10 @@ Result<std::unique_ptr<RecordSorter>> RecordSorter::create(std::size_t record_by
                                                   kMinBlockBytes,
                                                   std::max(options.max_io_buffer_bytes, kMinBlockBytes));
   out_bytes = std::max<std::size_t>(1, out_bytes / record_bytes) * record_bytes;
-  if (out_bytes >= budget) return too_small();
-  const std::size_t rest = static_cast<std::size_t>(budget) - out_bytes;
+  // The output buffer's keys (RecordSorter::keys()) come with it.
+  const std::size_t out_total = out_bytes + out_bytes / record_bytes * sizeof(std::uint64_t);
+  if (out_total >= budget) return too_small();
+  const std::size_t rest = static_cast<std::size_t>(budget) - out_total;
   const std::size_t run_capacity =
       std::min<std::size_t>(rest / (record_bytes + kRunOverhead),
                             std::numeric_limits<std::uint32_t>::max());

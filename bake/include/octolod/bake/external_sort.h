@@ -41,7 +41,7 @@ SortKeyFn sort_key_u64_at(std::size_t offset, std::size_t record_bytes);
 
 struct SortOptions {
   // Cap on all buffers of the sort together (run buffer with its key arrays, merge input
-  // buffers, output buffer). Larger budgets mean fewer runs and fewer merge passes. At least
+  // buffers, output buffer and its keys). Larger budgets mean fewer runs and fewer merge passes. At least
   // 16 KiB and room for a few records.
   std::uint64_t memory_budget_bytes = std::uint64_t{64} << 20;
   // Where run files go; the system temporary directory when empty.
@@ -85,6 +85,9 @@ class RecordSorter {
   // The next sorted records (at least one, or empty after the last); only after finish().
   // Valid until the next call.
   virtual Result<std::span<const std::byte>> next() = 0;
+  // The sort keys of the records the last next() returned, one per record (computed once,
+  // when the records entered the sort). Valid until the next call to next().
+  virtual std::span<const std::uint64_t> keys() const = 0;
 
   virtual const SortStats& stats() const = 0;
   virtual std::size_t record_bytes() const = 0;
