@@ -303,7 +303,8 @@ Result<OctreeResult> build_octree(const BakeOptions& options, const SoupResult& 
 // bits of pairs made in triangle order orders them by (key, triangle id); runs of equal keys are
 // then ordered by corner 2.
 unsigned mesh_id_bits(std::uint64_t triangles) {
-  return std::max(1u, static_cast<unsigned>(std::bit_width(std::max<std::uint64_t>(triangles, 1) - 1)));
+  const auto bits = std::bit_width(std::max<std::uint64_t>(triangles, 1) - 1);
+  return std::max(1u, static_cast<unsigned>(bits));
 }
 
 // Keys handed to the OctreeBuilder per push.
@@ -444,7 +445,8 @@ Result<OctreeResult> build_octree_from_mesh(const BakeOptions& options, unsigned
         for (std::size_t i = next_leaf; i < next_leaf + count; ++i, out += record_bytes) {
           const auto t = static_cast<std::uint32_t>(packed[i] & id_mask);
           for (std::size_t c = 0; c < 3; ++c) {
-            const float* v = mesh.vertices.data() + std::size_t{mesh.triangles[3 * std::size_t{t} + c]} * floats;
+            const std::size_t id = mesh.triangles[3 * std::size_t{t} + c];
+            const float* v = mesh.vertices.data() + id * floats;
             std::memcpy(out + c * vertex_bytes, v, vertex_bytes);
           }
           std::memcpy(out + 3 * vertex_bytes, &t, sizeof t);
