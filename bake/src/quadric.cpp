@@ -74,7 +74,8 @@ void symmetric_eigen(int m, Matrix& a, Vector& values, Matrix& vectors) {
 // entry, i.e. when M is comfortably full rank; false (x untouched) otherwise. The fast path of
 // solve_nearest: the attribute blocks of generalized quadrics are nearly always well
 // conditioned, and a factorization costs a small fraction of an eigen-decomposition.
-bool solve_well_conditioned(int m, const Matrix& mat, const double* rhs, double* x) {
+template <int m>
+bool solve_well_conditioned_fixed(const Matrix& mat, const double* rhs, double* x) {
   constexpr int s = kMaxQuadricDim;
   double largest = 0.0;
   for (int i = 0; i < m; ++i) largest = std::max(largest, mat[static_cast<std::size_t>(i * s + i)]);
@@ -112,6 +113,24 @@ bool solve_well_conditioned(int m, const Matrix& mat, const double* rhs, double*
   return true;
 }
 
+// solve_well_conditioned_fixed for m = 1..kMaxQuadricDim: a size known at compile time lets the
+// factorization's loops unroll (the attribute solves, m = 2..8, run once per output wedge).
+bool solve_well_conditioned(int m, const Matrix& mat, const double* rhs, double* x) {
+  switch (m) {
+    case 1: return solve_well_conditioned_fixed<1>(mat, rhs, x);
+    case 2: return solve_well_conditioned_fixed<2>(mat, rhs, x);
+    case 3: return solve_well_conditioned_fixed<3>(mat, rhs, x);
+    case 4: return solve_well_conditioned_fixed<4>(mat, rhs, x);
+    case 5: return solve_well_conditioned_fixed<5>(mat, rhs, x);
+    case 6: return solve_well_conditioned_fixed<6>(mat, rhs, x);
+    case 7: return solve_well_conditioned_fixed<7>(mat, rhs, x);
+    case 8: return solve_well_conditioned_fixed<8>(mat, rhs, x);
+    case 9: return solve_well_conditioned_fixed<9>(mat, rhs, x);
+    case 10: return solve_well_conditioned_fixed<10>(mat, rhs, x);
+    default: return solve_well_conditioned_fixed<kMaxQuadricDim>(mat, rhs, x);
+  }
+}
+
 // x = x0 + M^+ (rhs - M x0) for the symmetric m x m matrix M (row-major, stride
 // kMaxQuadricDim, destroyed): the solution of M x = rhs (least squares) nearest x0.
 void solve_nearest(int m, Matrix& mat, const double* rhs, const double* x0, double* x) {
@@ -144,16 +163,23 @@ void solve_nearest(int m, Matrix& mat, const double* rhs, const double* x0, doub
 
 }  // namespace
 
-void triangle_quadric(int n, const double* p, const double* q, const double* r, double weight,
-                      double* out) {
-  assert(n >= 3 && n <= kMaxQuadricDim && "quadric dimension must be 3..11");
-  const std::size_t count = quadric_doubles(n);
-  std::fill(out, out + count, 0.0);
-  if (weight <= 0.0) return;
+namespace {
+
+// triangle_quadric for a dimension known at compile time: the loops unroll and vectorize.
+template <int n>
+void triangle_quadric_fixed(const double* p, const double* q, const double* r, double weight, double* out) {
+  constexpr std::size_t count = quadric_doubles(n);
+  if (weight <= 0.0) {
+    std::fill(out, out + count, 0.0);
+    return;
+  }
   Vector e1{}, e2{};
   for (int i = 0; i < n; ++i) e1[static_cast<std::size_t>(i)] = q[i] - p[i];
   const double len1 = std::sqrt(dot(n, e1.data(), e1.data()));
-  if (!(len1 > 0.0)) return;
+  if (!(len1 > 0.0)) {
+    std::fill(out, out + count, 0.0);
+    return;
+  }
   for (int i = 0; i < n; ++i) e1[static_cast<std::size_t>(i)] /= len1;
   Vector rp{};
   for (int i = 0; i < n; ++i) rp[static_cast<std::size_t>(i)] = r[i] - p[i];
@@ -162,7 +188,10 @@ void triangle_quadric(int n, const double* p, const double* q, const double* r, 
     e2[static_cast<std::size_t>(i)] = rp[static_cast<std::size_t>(i)] - along * e1[static_cast<std::size_t>(i)];
   const double len2 = std::sqrt(dot(n, e2.data(), e2.data()));
   // Collinear in R^n: no plane. Relative test, so tiny well-shaped triangles still count.
-  if (!(len2 > 1e-12 * len1)) return;
+  if (!(len2 > 1e-12 * len1)) {
+    std::fill(out, out + count, 0.0);
+    return;
+  }
   for (int i = 0; i < n; ++i) e2[static_cast<std::size_t>(i)] /= len2;
 
   double* a = out;  // packed upper triangle, row by row
@@ -179,6 +208,24 @@ void triangle_quadric(int n, const double* p, const double* q, const double* r, 
     b[i] = weight * (pe1 * e1[ui] + pe2 * e2[ui] - p[i]);
   }
   out[count - 1] = weight * (dot(n, p, p) - pe1 * pe1 - pe2 * pe2);
+}
+
+}  // namespace
+
+void triangle_quadric(int n, const double* p, const double* q, const double* r, double weight,
+                      double* out) {
+  assert(n >= 3 && n <= kMaxQuadricDim && "quadric dimension must be 3..11");
+  switch (n) {
+    case 3: return triangle_quadric_fixed<3>(p, q, r, weight, out);
+    case 4: return triangle_quadric_fixed<4>(p, q, r, weight, out);
+    case 5: return triangle_quadric_fixed<5>(p, q, r, weight, out);
+    case 6: return triangle_quadric_fixed<6>(p, q, r, weight, out);
+    case 7: return triangle_quadric_fixed<7>(p, q, r, weight, out);
+    case 8: return triangle_quadric_fixed<8>(p, q, r, weight, out);
+    case 9: return triangle_quadric_fixed<9>(p, q, r, weight, out);
+    case 10: return triangle_quadric_fixed<10>(p, q, r, weight, out);
+    default: return triangle_quadric_fixed<kMaxQuadricDim>(p, q, r, weight, out);
+  }
 }
 
 void plane_quadric(const double* normal, const double* p, double weight, double* out) {

@@ -212,11 +212,16 @@ ClusteredMesh build_clustered_mesh(const NodeMesh& mesh, const Clustering& clust
   auto solved = [&](std::uint32_t v) { return !locked(v) && cluster_vertices[cluster[v]] > 1; };
 
   // quadrics: every triangle's area-weighted quadric added to the cluster (position-only) and
-  // the wedge (generalized) of each of its corners that is solved
+  // the wedge (generalized) of each of its corners that is solved; generalized quadrics (up to
+  // 78 doubles) only for the solved wedges, packed in wedge order
   const std::size_t q3 = quadric_doubles(3);
   const std::size_t qn = quadric_doubles(n);
   std::vector<double> cluster_quadric(clustering.count * q3, 0.0);
-  std::vector<double> wedge_quadric(attribute_count > 0 ? wedge_count * qn : 0, 0.0);
+  std::vector<std::uint32_t> quadric_slot(wedge_count, 0);
+  std::size_t solved_wedges = 0;
+  for (std::size_t w = 0; w < wedge_count; ++w)
+    if (solved(static_cast<std::uint32_t>(order[w]))) quadric_slot[w] = static_cast<std::uint32_t>(solved_wedges++);
+  std::vector<double> wedge_quadric(attribute_count > 0 ? solved_wedges * qn : 0, 0.0);
   for (std::size_t t = 0; t < triangle_count; ++t) {
     const std::uint32_t* corner = &mesh.indices[3 * t];
     if (!solved(corner[0]) && !solved(corner[1]) && !solved(corner[2])) continue;
@@ -237,7 +242,7 @@ ClusteredMesh build_clustered_mesh(const NodeMesh& mesh, const Clustering& clust
       const std::uint32_t v = corner[k];
       if (!solved(v)) continue;
       add_quadric(3, &cluster_quadric[cluster[v] * q3], quadric3);
-      if (attribute_count > 0) add_quadric(n, &wedge_quadric[wedge[v] * qn], quadric_n);
+      if (attribute_count > 0) add_quadric(n, &wedge_quadric[quadric_slot[wedge[v]] * qn], quadric_n);
     }
   }
 
@@ -273,7 +278,7 @@ ClusteredMesh build_clustered_mesh(const NodeMesh& mesh, const Clustering& clust
       for (int i = 0; i < 3; ++i) v[i] = cluster_position[c * 3 + static_cast<std::size_t>(i)] * position_scale;
       double mean[kMaxQuadricDim];
       for (int i = 0; i < n; ++i) mean[i] = wedge_sum[w * stride + static_cast<std::size_t>(i)] / wedge_vertices[w];
-      minimize_quadric_free_tail(n, 3, &wedge_quadric[w * qn], mean + 3, v);
+      minimize_quadric_free_tail(n, 3, &wedge_quadric[quadric_slot[w] * qn], mean + 3, v);
       finish_attributes(layout, layout.normal ? mean + 3 : nullptr, v + 3);
     }
     for (int i = 0; i < 3; ++i) v[i] = cluster_position[c * 3 + static_cast<std::size_t>(i)];
