@@ -17,6 +17,12 @@ count. It prints Markdown tables and checks the targets of issue 4:
     counts, so its RMS is interpolated at the default cut's count, linearly in log(triangles) /
     log(RMS) between its two nearest cuts of a denser ladder (or marked when out of its range).
 
+The reference (OpenMesh, about a minute per count on 1M triangles) is cached: each count's
+`octolod reference` mesh and its `octolod eval` against the input are kept under
+WORK/reference/ (keyed by input file, count and samples) and reused by later runs, so a rerun
+after a bake change only decimates the counts its cuts newly land on. The cuts themselves are
+measured by `octolod compare --no-reference`.
+
   bench/quality_bench.py --cli build/cli/octolod [--work /tmp/quality-bench]
                          [--shapes rock,city] [--triangles 1M] [--fractions 0.1,0.03,0.01]
                          [--memory 64M] [--samples 0] [--json results.json]
@@ -55,9 +61,44 @@ def bake(cli, work, ply, method, memory):
     return out, json.loads(run(cmd))
 
 
-def compare(cli, ply, tree, fractions, samples, reference=True):
-    cmd = [cli, "--json", "compare", ply, tree, "--fractions", fractions, "--samples", str(samples)]
-    return json.loads(run(cmd + ([] if reference else ["--no-reference"])))
+def compare(cli, ply, tree, fractions, samples, reference_dir=None):
+    """`octolod compare` of the tree's cuts; with reference_dir, each row also gets the reference
+    at its count (cached there) and the ratios, as `compare` without --no-reference gives them."""
+    cmd = [cli, "--json", "compare", ply, tree, "--fractions", fractions, "--samples", str(samples),
+           "--no-reference"]
+    result = json.loads(run(cmd))
+    if reference_dir:
+        for row in result["rows"]:
+            ref = reference(cli, reference_dir, ply, row["triangles"], samples)
+            row["reference_triangles"] = ref["triangles"]
+            row["reference_rms"] = ref["metro"]["two_sided"]["rms"]
+            row["reference_hausdorff"] = ref["metro"]["two_sided"]["max"]
+            row["rms_ratio"] = ratio(row["rms"], row["reference_rms"])
+            row["hausdorff_ratio"] = ratio(row["hausdorff"], row["reference_hausdorff"])
+    return result
+
+
+def ratio(a, b):
+    return a / b if b > 0 else None
+
+
+def reference(cli, directory, ply, triangles, samples):
+    """The reference at `triangles` and its Metro report against `ply`, from the cache when there."""
+    os.makedirs(directory, exist_ok=True)
+    stem = "%s_%d_s%d" % (os.path.basename(ply)[:-4], max(1, triangles), samples)
+    cached = os.path.join(directory, stem + ".json")
+    if os.path.exists(cached):
+        with open(cached) as f:
+            return json.load(f)
+    mesh = os.path.join(directory, stem + ".ply")
+    made = json.loads(run([cli, "--json", "reference", ply, "--triangles", str(max(1, triangles)),
+                           "-o", mesh]))
+    metro = json.loads(run([cli, "--json", "eval", ply, mesh, "--samples", str(samples)]))
+    entry = {"triangles": made["triangles"], "seconds": made["seconds"], "metro": metro}
+    with open(cached + ".tmp", "w") as f:
+        json.dump(entry, f, indent=1)
+    os.replace(cached + ".tmp", cached)
+    return entry
 
 
 def bade_verdict(rows, row):
@@ -119,16 +160,17 @@ def main():
     for shape in args.shapes.split(","):
         ply = sample(cli, args.work, shape, args.triangles)
         tree, baked = bake(cli, args.work, ply, None, args.memory)
-        default = compare(cli, ply, tree, args.fractions, args.samples)
+        reference_dir = os.path.join(args.work, "reference")
+        default = compare(cli, ply, tree, args.fractions, args.samples, reference_dir)
         reached = max(r["reference_triangles"] for r in default["rows"])
         if any(not like_for_like(r) for r in default["rows"]):
             fraction = "%.6g" % (reached / default["input_triangles"])
-            extra = compare(cli, ply, tree, fraction, args.samples)["rows"]
+            extra = compare(cli, ply, tree, fraction, args.samples, reference_dir)["rows"]
             known = {r["triangles"] for r in default["rows"]}
             default["rows"] = sorted(default["rows"] + [r for r in extra if r["triangles"] not in known],
                                      key=lambda r: -r["triangles"])
         bade_tree, bade_baked = bake(cli, args.work, ply, "bade2006", args.memory)
-        bade = compare(cli, ply, bade_tree, args.bade_fractions, args.samples, reference=False)
+        bade = compare(cli, ply, bade_tree, args.bade_fractions, args.samples)
         results[shape] = {"bake": baked, "compare": default, "bade2006_bake": bade_baked,
                           "bade2006_compare": bade}
         shutil.rmtree(tree, ignore_errors=True)

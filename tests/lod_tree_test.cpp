@@ -25,6 +25,7 @@
 #include "octolod/formats/node_file.h"
 #include "octolod/measure/triangle_bvh.h"
 #include "octolod/samplegen/sample_generator.h"
+#include "lod_tree.h"
 
 namespace octolod::bake {
 namespace {
@@ -124,7 +125,6 @@ TEST_F(LodTreeTest, EveryNodeHasAChainWhoseErrorsGrowAsItsTrianglesShrink) {
   ASSERT_GT(m.nodes.size(), 9u);
   EXPECT_EQ(m.parameters.method, "grid");
   std::size_t internal = 0;
-  std::uint64_t kept_of_merged[2] = {0, 0};  // internal nodes' LOD 0 and merged input triangles
   for (std::size_t i = 0; i < m.nodes.size(); ++i) {
     const NodeInfo& n = m.nodes[i];
     ASSERT_FALSE(n.lods.empty()) << "node '" << n.path << "' has no LOD";
@@ -151,33 +151,58 @@ TEST_F(LodTreeTest, EveryNodeHasAChainWhoseErrorsGrowAsItsTrianglesShrink) {
       continue;
     }
     ++internal;
-    // An internal node is simplified from its children's first simplified LODs (a leaf's LOD 1,
-    // an internal node's LOD 0): its error is at least theirs, and its finest LOD is smaller
-    // than their sum.
-    std::uint64_t merged = 0;
+    // An internal node is simplified from one LOD per child (choose_merged_lods), each at least
+    // as coarse as the child's LOD 0: its error is at least the largest of those LODs' errors,
+    // and its finest LOD has at most as many triangles as their LOD 0s together.
+    std::uint64_t finest = 0;
     double children_error = 0;
     for (std::int32_t c : n.children) {
       if (c < 0) continue;
       const NodeInfo& child = m.nodes[static_cast<std::size_t>(c)];
-      const LodInfo& first = child.lods[child.is_leaf() && child.lods.size() > 1 ? 1 : 0];
-      merged += first.triangles;
-      children_error = std::max(children_error, first.error);
+      finest += child.lods.front().triangles;
+      children_error = std::max(children_error, child.lods.front().error);
     }
     EXPECT_GE(n.lods[0].error, children_error) << n.path;
-    EXPECT_LE(n.lods[0].triangles, merged) << n.path;
-    kept_of_merged[0] += n.lods[0].triangles;
-    kept_of_merged[1] += merged;
+    EXPECT_LE(n.lods[0].triangles, finest) << n.path;
   }
   EXPECT_GT(internal, 0u);
-  // The first step of an internal node about halves its merged input (LodOptions::reduction),
-  // so the finer LODs move up the tree (lod_tree.h); merging internal children's LOD 1 instead
-  // kept about a quarter.
-  EXPECT_GT(static_cast<double>(kept_of_merged[0]), 0.35 * static_cast<double>(kept_of_merged[1]));
   // The root continues into a coarse chain: a distant rock costs a few hundred triangles.
   const NodeInfo& root = m.nodes[0];
   EXPECT_GE(root.lods.size(), 2u);
   EXPECT_LE(root.lods.back().triangles, 2u * 256u);
   EXPECT_GT(root.lods.back().error, 0.0);
+}
+
+// A LOD of a positions-only mesh with one vertex per two triangles: 18 bytes per triangle
+// ((triangles / 2 * 3 floats + 3 * triangles indices) * 4), so the bounds below are 18x the
+// triangle sums.
+LodInfo lod(std::uint32_t triangles) {
+  LodInfo l;
+  l.triangles = triangles;
+  l.vertices = triangles / 2;
+  return l;
+}
+
+TEST(ChooseMergedLods, TakesTheFinestLodsThatFitCoarseningTheLargestFirst) {
+  const std::vector<std::vector<LodInfo>> children{
+      {lod(1000), lod(500), lod(250)},
+      {lod(400), lod(200)},
+      {lod(1200)},  // no coarser LOD
+  };
+  using Chosen = std::vector<std::size_t>;
+  const VertexLayout layout;  // positions only
+  const auto choose = [&](std::size_t triangles) { return choose_merged_lods(children, layout, 18 * triangles); };
+  EXPECT_EQ(lod_mesh_bytes(lod(1000), layout), 18000u);
+  // everything fits: every child's LOD 0
+  EXPECT_EQ(choose(2600), (Chosen{0, 0, 0}));
+  // one short: the largest child that has a coarser LOD (the first; not the third) moves
+  EXPECT_EQ(choose(2599), (Chosen{1, 0, 0}));
+  EXPECT_EQ(choose(2100), (Chosen{1, 0, 0}));
+  // still the first (500 > 400), then the second (400 > 250, the first is at its coarsest)
+  EXPECT_EQ(choose(2099), (Chosen{2, 0, 0}));
+  EXPECT_EQ(choose(1849), (Chosen{2, 1, 0}));
+  // nothing fits: every child at its coarsest
+  EXPECT_EQ(choose(0), (Chosen{2, 1, 0}));
 }
 
 TEST_F(LodTreeTest, OneAndTwoThreadsWriteIdenticalLodTreesWithEitherMethod) {

@@ -1,7 +1,7 @@
 // LOD chains of one octree node by sequential simplification (seed 3.5.3, 5.3.2): each LOD is
 // simplified from the previous one, and its error bound adds up along the chain (the triangle
 // inequality: dist(original, LOD k) <= dist(original, LOD k-1) + dist(LOD k-1, LOD k)). Internal
-// nodes start from the merge of their children's first simplified LODs (lod_tree.h), for
+// nodes start from the merge of one LOD per child (lod_tree.h: the finest that fit), for
 // unbalanced trees too.
 #include <cassert>
 #include <cmath>

@@ -26,14 +26,14 @@ std::size_t mesh_bytes(const NodeMesh& mesh) {
   return (mesh.vertices.size() + mesh.indices.size()) * sizeof(float);
 }
 
-// A child's first simplified LOD as its parent will merge it.
+// A finished child as its parent sees it: its chain, and its LOD 0 while kept in memory.
 struct ChildLod {
   bool present = false;
-  bool in_memory = false;  // else re-read `file`
+  std::vector<LodInfo> lods;  // finest first
+  bool in_memory = false;     // LOD 0 is in `mesh`; every other LOD is read from its file
+  bool spilled = false;       // LOD 0 was not kept because the kept bytes were full
   NodeMesh mesh;
-  std::string file;
-  double error = 0;
-  std::size_t bytes = 0;  // counted in the kept bytes while in memory
+  std::size_t bytes = 0;      // counted in the kept bytes while in memory
 };
 
 // The scheduler's view of one octree node.
@@ -71,9 +71,7 @@ bool later(const Task& a, const Task& b) {
 // What a finished node hands back to the scheduler.
 struct NodeDone {
   NodeLods lods;
-  NodeMesh handed;  // the first simplified LOD (or LOD 0 of a one-LOD leaf), for the parent
-  std::size_t handed_index = 0;
-  double handed_error = 0;
+  NodeMesh finest;  // LOD 0, which the parent merges when it fits its merge_bytes
 };
 
 // A thread's reusable buffers.
@@ -87,7 +85,9 @@ Status interrupted() { return io_error("bake interrupted by a signal"); }
 
 class LodTreeBuilder::Impl {
  public:
-  explicit Impl(LodTreeOptions options) : options_(std::move(options)) {
+  explicit Impl(LodTreeOptions options)
+      : options_(std::move(options)),
+        merge_bytes_(options_.merge_bytes ? options_.merge_bytes : 2 * options_.queue_bytes) {
     for (unsigned i = 0; i < options_.workers; ++i) threads_.emplace_back([this] { work(); });
   }
   ~Impl() { stop(); }
@@ -234,7 +234,7 @@ class LodTreeBuilder::Impl {
     std::uint64_t rereads = 0;
     for (ChildLod& c : children) {
       if (c.present && c.in_memory) released += c.bytes;
-      if (c.present && !c.in_memory) ++rereads;
+      if (c.spilled) ++rereads;
       c = {};
     }
     const double seconds = std::chrono::duration<double>(Clock::now() - start).count();
@@ -263,29 +263,35 @@ class LodTreeBuilder::Impl {
     if (!options_.build_lods) {
       std::vector<Lod> lods(1);
       lods[0].mesh = std::move(mesh);
-      return write_lods(dir, lods, true);
+      return write_lods(dir, lods);
     }
     LodOptions o = options_.lod;
     o.include_input = true;
     auto lods = build_lods(std::move(mesh), 0.0, cell, o);
     if (!lods.ok()) return lods.status();
-    return write_lods(dir, lods.value(), true);
+    return write_lods(dir, lods.value());
   }
 
   Result<NodeDone> run_internal(std::array<ChildLod, 8>& children, const std::string& dir,
                                 const Bounds& cell) {
     if (cleanup_signal_received()) return interrupted();
     if (!options_.build_lods) return NodeDone{};
+    std::vector<std::vector<LodInfo>> chains;
+    for (const ChildLod& c : children)
+      if (c.present) chains.push_back(c.lods);
+    const std::vector<std::size_t> chosen = choose_merged_lods(chains, options_.layout, merge_bytes_);
     double input_error = 0;
     std::vector<const NodeMesh*> meshes;
+    std::size_t next = 0;
     for (ChildLod& c : children) {
       if (!c.present) continue;
-      if (!c.in_memory) {
-        auto read = read_node_file(options_.root / c.file);
+      const LodInfo& lod = c.lods[chosen[next++]];
+      if (!c.in_memory || &lod != &c.lods.front()) {
+        auto read = read_node_file(options_.root / lod.file);
         if (!read.ok()) return read.status();
         c.mesh = std::move(read).value();
       }
-      input_error = std::max(input_error, c.error);
+      input_error = std::max(input_error, lod.error);
       meshes.push_back(&c.mesh);
     }
     NodeMesh merged = merge_meshes(meshes);
@@ -294,7 +300,7 @@ class LodTreeBuilder::Impl {
     o.include_input = false;
     auto lods = build_lods(std::move(merged), input_error, cell, o);
     if (!lods.ok()) return lods.status();
-    return write_lods(dir, lods.value(), false);
+    return write_lods(dir, lods.value());
   }
 
   Status make_directory(const std::string& dir) const {
@@ -308,9 +314,8 @@ class LodTreeBuilder::Impl {
     return {};
   }
 
-  // Writes lod<i>.olod for every LOD; the first simplified one (a leaf's LOD 1, an internal
-  // node's LOD 0) is kept for the parent.
-  Result<NodeDone> write_lods(const std::string& dir, std::vector<Lod>& lods, bool leaf) const {
+  // Writes lod<i>.olod for every LOD; LOD 0 is handed to the parent.
+  Result<NodeDone> write_lods(const std::string& dir, std::vector<Lod>& lods) const {
     OCTOLOD_RETURN_IF_ERROR(make_directory(dir));
     NodeDone done;
     for (std::size_t i = 0; i < lods.size(); ++i) {
@@ -326,23 +331,18 @@ class LodTreeBuilder::Impl {
       done.lods.bounds.extend(mesh.bounds());
       done.lods.lods.push_back(std::move(info));
     }
-    if (!lods.empty()) {
-      done.handed_index = leaf && lods.size() > 1 ? 1 : 0;
-      done.handed_error = lods[done.handed_index].error;
-      done.handed = std::move(lods[done.handed_index].mesh);
-    }
+    if (!lods.empty()) done.finest = std::move(lods.front().mesh);
     return done;
   }
 
-  // A node's chain is complete: record it and hand its first simplified LOD to the parent,
-  // which becomes ready with its last child. Under the lock.
+  // A node's chain is complete: record it and hand it to the parent (LOD 0 in memory while the
+  // kept bytes allow), which becomes ready with its last child. Under the lock.
   void deliver(std::int32_t node, NodeDone done) {
     ++completed_;
     const Slot& s = slots_[static_cast<std::size_t>(node)];
     const std::int32_t parent = s.parent;
     const std::uint32_t octant = s.octant;
     const bool has_lod = options_.build_lods && !done.lods.lods.empty();
-    const std::string handed_file = has_lod ? done.lods.lods[done.handed_index].file : "";
     results_[static_cast<std::size_t>(node)] = std::move(done.lods);
     if (parent < 0) return;
     Slot& p = slots_[static_cast<std::size_t>(parent)];
@@ -351,16 +351,20 @@ class LodTreeBuilder::Impl {
       if (!p.child) p.child = std::make_unique<std::array<ChildLod, 8>>();
       ChildLod& c = (*p.child)[octant];
       c.present = true;
-      c.error = done.handed_error;
-      c.file = handed_file;
-      p.child_triangles += done.handed.triangle_count();
-      const std::size_t bytes = mesh_bytes(done.handed);
-      if (kept_bytes_ + bytes <= options_.keep_bytes) {
-        c.in_memory = true;
-        c.bytes = bytes;
-        c.mesh = std::move(done.handed);
-        kept_bytes_ += bytes;
-        stats_.peak_kept_bytes = std::max<std::uint64_t>(stats_.peak_kept_bytes, kept_bytes_);
+      c.lods = results_[static_cast<std::size_t>(node)]->lods;
+      p.child_triangles += done.finest.triangle_count();
+      const std::size_t bytes = mesh_bytes(done.finest);
+      // a LOD 0 larger than a whole merged input is only merged where nothing coarser exists:
+      // not worth keeping
+      if (bytes <= merge_bytes_) {
+        c.spilled = kept_bytes_ + bytes > options_.keep_bytes;
+        if (!c.spilled) {
+          c.in_memory = true;
+          c.bytes = bytes;
+          c.mesh = std::move(done.finest);
+          kept_bytes_ += bytes;
+          stats_.peak_kept_bytes = std::max<std::uint64_t>(stats_.peak_kept_bytes, kept_bytes_);
+        }
       }
     }
     if (p.closed && p.done == p.children) push_internal(parent);
@@ -387,6 +391,7 @@ class LodTreeBuilder::Impl {
   }
 
   const LodTreeOptions options_;
+  const std::size_t merge_bytes_;
   std::vector<std::thread> threads_;
   std::mutex mutex_;
   std::condition_variable work_;   // tasks or stop for the workers
@@ -404,6 +409,32 @@ class LodTreeBuilder::Impl {
   Scratch caller_scratch_;
   LodTreeStats stats_;
 };
+
+std::size_t lod_mesh_bytes(const LodInfo& lod, VertexLayout layout) {
+  return (std::size_t{lod.vertices} * layout.floats() + 3 * std::size_t{lod.triangles}) * sizeof(float);
+}
+
+std::vector<std::size_t> choose_merged_lods(const std::vector<std::vector<LodInfo>>& children,
+                                            VertexLayout layout, std::size_t merge_bytes) {
+  std::vector<std::size_t> chosen(children.size(), 0);
+  std::size_t total = 0;
+  for (const std::vector<LodInfo>& chain : children) total += lod_mesh_bytes(chain.front(), layout);
+  while (total > merge_bytes) {
+    std::size_t largest = children.size();
+    std::size_t largest_bytes = 0;
+    for (std::size_t c = 0; c < children.size(); ++c) {
+      const std::size_t bytes = lod_mesh_bytes(children[c][chosen[c]], layout);
+      if (chosen[c] + 1 < children[c].size() && (largest == children.size() || bytes > largest_bytes)) {
+        largest = c;
+        largest_bytes = bytes;
+      }
+    }
+    if (largest == children.size()) break;  // every child at its coarsest
+    ++chosen[largest];
+    total = total - largest_bytes + lod_mesh_bytes(children[largest][chosen[largest]], layout);
+  }
+  return chosen;
+}
 
 LodTreeBuilder::LodTreeBuilder(LodTreeOptions options)
     : impl_(std::make_unique<Impl>(std::move(options))) {}

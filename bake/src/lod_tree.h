@@ -4,21 +4,19 @@
 //   leaf      its triangles are indexed (node_index.h) and become LOD 0 (the original, error 0);
 //             build_lods continues the chain from it
 //   internal  once the stream has left its key range (all its children are known) and every
-//             child's chain is done: merge_meshes of the children's first simplified LODs (a
-//             leaf's LOD 1, or its LOD 0 when it has only one; an internal node's LOD 0, which
-//             is already its first simplification), in octant order, with input error = the
-//             max of those LODs' errors; build_lods from there. Bottom-up whatever the tree's
-//             balance.
+//             child's chain is done: merge_meshes of one LOD per child (choose_merged_lods: the
+//             finest ones whose meshes fit LodTreeOptions::merge_bytes together, a leaf's
+//             original triangles when they do), in octant order, with input error = the max of
+//             those LODs' errors; build_lods from there. Bottom-up whatever the tree's balance.
 //
-// Why an internal child hands its LOD 0 and not its LOD 1: every node keeps its outer boundary
-// at the original resolution (crack-freedom for any cut, simplify.h), so a uniform cut through
-// many small nodes spends most of its triangles on locked boundary fans (on a 1M rock, 38% of a
-// 10% cut's triangles and 60% of a 1% cut's touched a locked edge). Handing LOD 0 makes a
-// parent's LOD 0 about twice a child's instead of about as large, so the nodes near the root hold
-// the finer LODs (the 1M rock's root starts at 16K triangles instead of 5.6K) and a coarse
-// uniform cut is a few large nodes with few locked edges; one accumulated step less per level.
-// Leaves still hand their LOD 1: handing their original triangles too (root LOD 0 32K) was
-// better still on the rock, but raised the 1M city's peak RSS at --memory 64M from 49 to 124 MiB.
+// Why the finest LODs that fit: every node keeps its outer boundary at the original resolution
+// (crack-freedom for any cut, simplify.h), so a uniform cut through many small nodes spends most
+// of its triangles on locked boundary fans (on a 1M rock, 38% of a 10% cut's triangles and 60%
+// of a 1% cut's touched a locked edge when parents merged their children's second LODs). Merging
+// the finest LODs makes a parent's LOD 0 about twice a child's, so the nodes near the root hold
+// the finer LODs and a coarse uniform cut is a few large nodes with few locked edges. The
+// clustering holds its whole input, so the merged input is bounded: near the root (and on
+// inputs that hardly simplify, a city's separate boxes) children hand coarser LODs instead.
 //
 // Every node's chain ends at LodOptions::min_triangles or where its locked boundary stops the
 // halving, so the nodes near the root (few locked edges) continue into a coarse chain. Errors
@@ -31,9 +29,10 @@
 // up its parent (and the siblings' kept LODs) for long. A node's files depend only on its own input, which depends only on the
 // input mesh and the options: the output is the same for any thread count and schedule.
 //
-// Memory: the leaves waiting for a thread (queue_bytes), the node work in flight, and the
-// children's first simplified LODs kept for their pending parents up to keep_bytes; past that,
-// a child's LOD is dropped and its parent re-reads it from the child's file (identical bytes).
+// Memory: the leaves waiting for a thread (queue_bytes), the node work in flight (an internal
+// node's input is at most merge_bytes of mesh), and the children's finest LODs kept for their
+// pending parents up to keep_bytes; past that, or when the parent merges a coarser one, the
+// parent reads the child's file (identical bytes).
 #pragma once
 
 #include <cstddef>
@@ -71,11 +70,30 @@ struct LodTreeOptions {
   unsigned workers = 0;         // threads besides the caller; 0: the caller does all node work
   std::size_t queue_bytes = 0;  // leaf records waiting for a thread (one leaf always fits)
   std::size_t keep_bytes = 0;   // children's LODs kept in memory for their parents
+  // Upper bound of an internal node's merged input in NodeMesh bytes (lod_mesh_bytes), unless
+  // its children's coarsest LODs alone exceed it. It must not depend on the memory budget (the
+  // tree does not): 0 means 2 x queue_bytes, which the bake sets to two leaves' soup records
+  // (max_tris and the layout), ~1 MiB with the defaults: 1M rock / city peak RSS at --memory
+  // 64M 74 / 63 MiB; at twice that the city's was 92 MiB, over the budget + 24 MiB.
+  std::size_t merge_bytes = 0;
 };
+
+// Bytes of the NodeMesh of a LOD: its vertex floats and its indices.
+std::size_t lod_mesh_bytes(const LodInfo& lod, VertexLayout layout);
+
+// Which LOD of each child an internal node merges (an index into each child's chain, finest
+// first): every child's finest LOD when their lod_mesh_bytes sum to at most merge_bytes;
+// otherwise, one step at a time, the child whose chosen LOD has the most bytes (the first of
+// equals) moves to its next coarser LOD until the sum fits or every child is at its coarsest.
+// Depends only on the chains: the same on any thread and schedule. Every chain non-empty.
+std::vector<std::size_t> choose_merged_lods(const std::vector<std::vector<LodInfo>>& children,
+                                            VertexLayout layout, std::size_t merge_bytes);
 
 struct LodTreeStats {
   double work_seconds = 0;  // node work summed over threads (indexing, LOD chains, files)
-  std::uint64_t reread_lods = 0;  // children's LODs a parent re-read from their files
+  // children's LODs 0 a parent re-read from their files because the kept bytes were full (a
+  // parent that merges a coarser LOD always reads its file)
+  std::uint64_t reread_lods = 0;
   std::uint64_t peak_kept_bytes = 0;
 };
 

@@ -88,8 +88,7 @@ struct LodOptions {
   // Upper limit of the number of LODs returned (including the input when include_input).
   std::uint32_t max_lods = 16;
   // true (leaves): LOD 0 is the input itself, with input_error. false (internal nodes, whose
-  // input is merge_meshes of what the children hand up: a leaf's first simplified LOD, an
-  // internal child's LOD 0): LOD 0 is the first
+  // input is merge_meshes of one LOD per child, lod_tree.h): LOD 0 is the first
   // simplification of the input, which only has to be smaller than the input (not `reduction`
   // times smaller); when even that fails (or the input is already at most min_triangles), LOD 0
   // is the input itself, so an internal node always gets at least one LOD.
