@@ -10,6 +10,8 @@
 #include <fstream>
 #include <string>
 
+#include <zlib.h>
+
 #include "byte_io.h"
 
 namespace octolod {
@@ -20,19 +22,6 @@ constexpr std::size_t kCrcBytes = 4;
 
 std::uint32_t index_bytes_for(std::size_t vertex_count) { return vertex_count <= 0xFFFFu ? 2u : 4u; }
 
-const std::array<std::uint32_t, 256>& crc_table() {
-  static const std::array<std::uint32_t, 256> table = [] {
-    std::array<std::uint32_t, 256> t{};
-    for (std::uint32_t i = 0; i < 256; ++i) {
-      std::uint32_t c = i;
-      for (int k = 0; k < 8; ++k) c = (c & 1u) ? 0xEDB88320u ^ (c >> 1) : c >> 1;
-      t[i] = c;
-    }
-    return t;
-  }();
-  return table;
-}
-
 Status corrupt(std::string_view name, std::size_t offset, const std::string& what) {
   return bad_input_error(std::string(name) + ": byte offset " + std::to_string(offset) + ": " + what);
 }
@@ -40,10 +29,10 @@ Status corrupt(std::string_view name, std::size_t offset, const std::string& wha
 }  // namespace
 
 std::uint32_t crc32(std::span<const std::byte> bytes, std::uint32_t crc) {
-  const auto& table = crc_table();
-  crc = ~crc;
-  for (std::byte b : bytes) crc = table[(crc ^ static_cast<std::uint32_t>(b)) & 0xFFu] ^ (crc >> 8);
-  return ~crc;
+  // zlib's table-driven CRC processes several bytes per step: a byte-wise loop took ~15% of a
+  // --method none bake's cycles.
+  return static_cast<std::uint32_t>(
+      ::crc32_z(crc, reinterpret_cast<const Bytef*>(bytes.data()), bytes.size()));
 }
 
 Bounds NodeMesh::bounds() const {
