@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cerrno>
 #include <chrono>
 #include <condition_variable>
 #include <mutex>
@@ -11,6 +12,8 @@
 #include <system_error>
 #include <thread>
 #include <utility>
+
+#include <sys/stat.h>
 
 #include "node_index.h"
 #include "octolod/formats/node_file.h"
@@ -305,11 +308,13 @@ class LodTreeBuilder::Impl {
 
   Status make_directory(const std::string& dir) const {
     if (dir.empty()) return {};
+    // Usually only the last component is missing: one mkdir(2), no stat of every component.
+    const fs::path path = options_.root / dir;
+    if (::mkdir(path.c_str(), 0777) == 0 || errno == EEXIST) return {};
     std::error_code ec;
-    fs::create_directories(options_.root / dir, ec);
+    fs::create_directories(path, ec);
     if (ec) {
-      return io_error("cannot create node directory '" + (options_.root / dir).string() +
-                      "': " + ec.message());
+      return io_error("cannot create node directory '" + path.string() + "': " + ec.message());
     }
     return {};
   }
