@@ -5,7 +5,6 @@
 #include "octolod/bake/bake.h"
 
 #include <algorithm>
-#include <bit>
 #include <chrono>
 #include <cstring>
 #include <optional>
@@ -22,6 +21,7 @@
 #include "octolod/formats/node_file.h"
 #include "octree_build.h"
 #include "page_array.h"
+#include "radix_sort.h"
 #include "peak_rss.h"
 #include "record_file.h"
 #include "temp_dir.h"
@@ -298,83 +298,42 @@ Result<OctreeResult> build_octree(const BakeOptions& options, const SoupResult& 
 // leaves are the records path's: the soup (SoupOrder::by_last_corner) comes in (corner 2's
 // vertex id, triangle id) order and the octree sort is stable, so a leaf holds its triangles
 // by (key, corner 2's vertex id, triangle id), as here.
-//
-// A pair is packed into one u64, key << id_bits | triangle id; a stable radix sort on the key
-// bits of pairs made in triangle order orders them by (key, triangle id); runs of equal keys are
-// then ordered by corner 2.
-unsigned mesh_id_bits(std::uint64_t triangles) {
-  const auto bits = std::bit_width(std::max<std::uint64_t>(triangles, 1) - 1);
-  return std::max(1u, static_cast<unsigned>(bits));
-}
 
-// Keys handed to the OctreeBuilder per push.
+// Keys handed to the OctreeBuilder per push (and progress granularity).
 constexpr std::size_t kMeshKeyBlock = 1 << 14;
 
-// Whether the in-memory octree takes a mesh of this shape: the packing fits in 64 bits and the
-// mesh (vertex array, 12 bytes per triangle), the packed pairs with their radix scratch and the
-// key block fit in what the node work leaves of the budget.
+// Whether the in-memory octree takes a mesh of this shape: the mesh (vertex array, 12 bytes
+// per triangle) and the keys and triangle ids with their radix scratch fit in what the node
+// work leaves of the budget.
 bool mesh_octree_fits(const BakeOptions& options, unsigned workers, VertexLayout layout,
                       std::uint64_t vertices, std::uint64_t triangles) {
-  if (3 * options.max_depth + mesh_id_bits(triangles) > 64) return false;
   auto budget = divide_octree_budget(options, layout, workers);
   if (!budget.ok()) return false;
-  const std::uint64_t bytes = vertices * layout.bytes() +
-                              triangles * (12 + 2 * sizeof(std::uint64_t)) +
-                              kMeshKeyBlock * sizeof(std::uint64_t);
+  const std::uint64_t bytes =
+      vertices * layout.bytes() +
+      triangles * (12 + 2 * (sizeof(std::uint64_t) + sizeof(std::uint32_t)));
   return bytes <= budget->sort_bytes;
 }
 
-// Stable LSD radix sort of `values` by their bits [low, low + bits), 11 bits per pass (digits
-// that do not vary are skipped). `scratch` holds values.size() entries; the result ends in
-// `values`.
-void radix_sort_u64(std::span<std::uint64_t> values, std::span<std::uint64_t> scratch,
-                    unsigned low, unsigned bits) {
-  constexpr unsigned kDigit = 11;
-  constexpr std::size_t kBuckets = std::size_t{1} << kDigit;
-  const std::size_t n = values.size();
-  if (n < 2) return;
-  const unsigned passes = (bits + kDigit - 1) / kDigit;
-  std::vector<std::uint32_t> counts(passes * kBuckets, 0);
-  for (const std::uint64_t v : values)
-    for (unsigned p = 0; p < passes; ++p)
-      ++counts[p * kBuckets + ((v >> (low + kDigit * p)) & (kBuckets - 1))];
-  std::uint64_t* from = values.data();
-  std::uint64_t* to = scratch.data();
-  for (unsigned p = 0; p < passes; ++p) {
-    std::uint32_t* count = counts.data() + p * kBuckets;
-    const unsigned shift = low + kDigit * p;
-    if (count[(from[0] >> shift) & (kBuckets - 1)] == n) continue;  // the same everywhere
-    std::uint32_t offset = 0;
-    for (std::size_t b = 0; b < kBuckets; ++b) {
-      const std::uint32_t next = offset + count[b];
-      count[b] = offset;
-      offset = next;
-    }
-    for (std::size_t i = 0; i < n; ++i) {
-      const std::uint64_t v = from[i];
-      to[count[(v >> shift) & (kBuckets - 1)]++] = v;
-    }
-    std::swap(from, to);
-  }
-  if (from != values.data()) std::copy(from, from + n, values.data());
-}
+// The mesh's triangles in leaf order: ids[i] with its centroid key keys[i].
+struct MeshOrder {
+  PageArray<std::uint64_t> keys;
+  PageArray<std::uint32_t> ids;
+};
 
-// The mesh's triangles in leaf order, packed (see above).
-PageArray<std::uint64_t> sort_mesh_triangles(const BakeOptions& options, unsigned threads,
-                                             const SoupMesh& mesh, const RootCube& cube,
-                                             unsigned id_bits) {
+MeshOrder sort_mesh_triangles(const BakeOptions& options, unsigned threads, const SoupMesh& mesh,
+                              const RootCube& cube) {
   const std::size_t floats = mesh.layout.floats();
   const std::size_t n = mesh.triangles.size() / 3;
   const MortonQuantizer quantizer(cube, options.max_depth);
-  PageArray<std::uint64_t> packed(n);
+  MeshOrder sorted{PageArray<std::uint64_t>(n), PageArray<std::uint32_t>(n)};
   auto compute = [&](std::size_t begin, std::size_t end) {
     for (std::size_t t = begin; t < end; ++t) {
       const std::uint32_t* v = mesh.triangles.data() + 3 * t;
-      const std::uint64_t key =
-          centroid_key(quantizer, mesh.vertices.data() + std::size_t{v[0]} * floats,
-                       mesh.vertices.data() + std::size_t{v[1]} * floats,
-                       mesh.vertices.data() + std::size_t{v[2]} * floats);
-      packed[t] = key << id_bits | t;
+      sorted.keys[t] = centroid_key(quantizer, mesh.vertices.data() + std::size_t{v[0]} * floats,
+                                    mesh.vertices.data() + std::size_t{v[1]} * floats,
+                                    mesh.vertices.data() + std::size_t{v[2]} * floats);
+      sorted.ids[t] = static_cast<std::uint32_t>(t);
     }
   };
   if (threads > 1 && n >= (1u << 16)) {
@@ -385,24 +344,27 @@ PageArray<std::uint64_t> sort_mesh_triangles(const BakeOptions& options, unsigne
     compute(0, n);
   }
   {
-    // By key only: the pairs start in triangle id order and the sort is stable.
-    PageArray<std::uint64_t> scratch(n);
-    radix_sort_u64(std::span<std::uint64_t>(packed.get(), n),
-                   std::span<std::uint64_t>(scratch.get(), n), id_bits, 3 * options.max_depth);
+    // By key: the ids start in triangle order and the sort is stable.
+    MeshOrder scratch{PageArray<std::uint64_t>(n), PageArray<std::uint32_t>(n)};
+    std::uint64_t* keys = sorted.keys.get();
+    std::uint32_t* ids = sorted.ids.get();
+    std::uint64_t* keys_tmp = scratch.keys.get();
+    std::uint32_t* ids_tmp = scratch.ids.get();
+    radix_sort(keys, ids, keys_tmp, ids_tmp, n);
+    if (keys != sorted.keys.get()) std::swap(sorted, scratch);  // keep the result, free the rest
   }
   // Equal keys: by corner 2's vertex id, then triangle id (already so).
-  const std::uint64_t id_mask = (std::uint64_t{1} << id_bits) - 1;
-  auto corner2 = [&](std::uint64_t p) { return mesh.triangles[3 * (p & id_mask) + 2]; };
+  auto corner2 = [&](std::uint32_t t) { return mesh.triangles[3 * std::size_t{t} + 2]; };
   for (std::size_t i = 0; i < n;) {
     std::size_t j = i + 1;
-    while (j < n && (packed[j] >> id_bits) == (packed[i] >> id_bits)) ++j;
+    while (j < n && sorted.keys[j] == sorted.keys[i]) ++j;
     if (j - i > 1) {
-      std::stable_sort(packed.get() + i, packed.get() + j,
-                       [&](std::uint64_t a, std::uint64_t b) { return corner2(a) < corner2(b); });
+      std::stable_sort(sorted.ids.get() + i, sorted.ids.get() + j,
+                       [&](std::uint32_t a, std::uint32_t b) { return corner2(a) < corner2(b); });
     }
     i = j;
   }
-  return packed;
+  return sorted;
 }
 
 Result<OctreeResult> build_octree_from_mesh(const BakeOptions& options, unsigned threads,
@@ -413,12 +375,10 @@ Result<OctreeResult> build_octree_from_mesh(const BakeOptions& options, unsigned
   auto budget = divide_octree_budget(options, mesh.layout, workers);
   if (!budget.ok()) return budget.status();
   const std::size_t n = mesh.triangles.size() / 3;
-  const unsigned id_bits = mesh_id_bits(n);
 
   // sort: keys computed and sorted in memory
   auto start = Clock::now();
-  const PageArray<std::uint64_t> packed =
-      sort_mesh_triangles(options, threads, mesh, result.cube, id_bits);
+  const MeshOrder sorted = sort_mesh_triangles(options, threads, mesh, result.cube);
   result.sort.records = n;
   result.sort.in_core = true;
   result.sort_seconds = seconds_since(start);
@@ -428,11 +388,8 @@ Result<OctreeResult> build_octree_from_mesh(const BakeOptions& options, unsigned
   start = Clock::now();
   LodTreeBuilder lod_tree(
       lod_tree_options(options, mesh.layout, result.cube, root, workers, budget.value()));
-  const std::size_t floats = mesh.layout.floats();
-  const std::size_t vertex_bytes = mesh.layout.bytes();
   const std::size_t record_bytes = soup_record_bytes(mesh.layout);
-  const std::uint64_t id_mask = (std::uint64_t{1} << id_bits) - 1;
-  std::size_t next_leaf = 0;  // first entry of `packed` in the next leaf
+  std::size_t next_leaf = 0;  // first entry of `sorted` in the next leaf
   OctreeBuilder* builder_ptr = nullptr;
   OctreeBuilder builder(
       options.max_tris, options.max_depth, 0,
@@ -443,24 +400,18 @@ Result<OctreeResult> build_octree_from_mesh(const BakeOptions& options, unsigned
         std::vector<std::byte> records(count * record_bytes);
         std::byte* out = records.data();
         for (std::size_t i = next_leaf; i < next_leaf + count; ++i, out += record_bytes) {
-          const auto t = static_cast<std::uint32_t>(packed[i] & id_mask);
-          for (std::size_t c = 0; c < 3; ++c) {
-            const std::size_t id = mesh.triangles[3 * std::size_t{t} + c];
-            const float* v = mesh.vertices.data() + id * floats;
-            std::memcpy(out + c * vertex_bytes, v, vertex_bytes);
-          }
-          std::memcpy(out + 3 * vertex_bytes, &t, sizeof t);
+          const std::uint32_t t = sorted.ids[i];
+          store_soup_record(out, mesh.layout, mesh.vertices.data(),
+                            mesh.triangles.data() + 3 * std::size_t{t}, t);
         }
         next_leaf += count;
         return lod_tree.add_leaf(node, nodes, std::move(records));
       });
   builder_ptr = &builder;
-  std::vector<std::uint64_t> keys(kMeshKeyBlock);
   for (std::size_t first = 0; first < n; first += kMeshKeyBlock) {
     const std::size_t m = std::min(kMeshKeyBlock, n - first);
-    for (std::size_t i = 0; i < m; ++i) keys[i] = packed[first + i] >> id_bits;
     OCTOLOD_RETURN_IF_ERROR(
-        builder.push({}, std::span<const std::uint64_t>(keys.data(), m)));
+        builder.push({}, std::span<const std::uint64_t>(sorted.keys.get() + first, m)));
     if (options.progress) options.progress("octree", first + m, n);
   }
   OCTOLOD_RETURN_IF_ERROR(builder.finish());

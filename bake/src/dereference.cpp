@@ -84,8 +84,6 @@ Status dereference_pass(int corner, VertexLayout layout, RecordSorter& sorted,
 
 Status dereference_in_core(VertexLayout layout, std::span<const float> vertices,
                            RecordSorter& sorted, RecordOutput& out) {
-  const std::size_t floats = layout.floats();
-  const std::size_t vertex_bytes = layout.bytes();
   const std::size_t out_bytes = soup_record_bytes(layout);
   assert(sorted.record_bytes() == sizeof(TriangleRecord));
   for (;;) {
@@ -100,11 +98,8 @@ Status dereference_in_core(VertexLayout layout, std::span<const float> vertices,
       const std::size_t n = space->size() / out_bytes;
       std::byte* dst = space->data();
       for (std::size_t i = 0; i < n; ++i, rec += sizeof(TriangleRecord), dst += out_bytes) {
-        for (std::size_t c = 0; c < 3; ++c) {
-          const std::size_t id = load_u32(rec + 4 * c);
-          std::memcpy(dst + c * vertex_bytes, vertices.data() + id * floats, vertex_bytes);
-        }
-        std::memcpy(dst + 3 * vertex_bytes, rec + 12, 4);
+        const std::uint32_t corners[3] = {load_u32(rec), load_u32(rec + 4), load_u32(rec + 8)};
+        store_soup_record(dst, layout, vertices.data(), corners, load_u32(rec + 12));
       }
       OCTOLOD_RETURN_IF_ERROR(out.commit(n));
       left -= n;
@@ -116,8 +111,6 @@ Status dereference_in_core(VertexLayout layout, std::span<const float> vertices,
 std::vector<std::byte> dereference_in_memory(std::span<const float> vertices,
                                              std::span<const std::uint32_t> triangles,
                                              VertexLayout layout, SoupOrder order) {
-  const std::size_t floats = layout.floats();
-  const std::size_t vertex_bytes = layout.bytes();
   const std::size_t out_bytes = soup_record_bytes(layout);
   const std::size_t count = triangles.size() / 3;
   // Output order: triangle ids, stably sorted by corner 2's id for by_last_corner.
@@ -131,13 +124,11 @@ std::vector<std::byte> dereference_in_memory(std::span<const float> vertices,
   std::vector<std::byte> soup(count * out_bytes);
   for (std::size_t i = 0; i < count; ++i) {
     const std::uint32_t t = order_ids[i];
-    std::byte* out = soup.data() + i * out_bytes;
-    for (std::size_t c = 0; c < 3; ++c) {
-      const std::size_t id = triangles[3 * std::size_t{t} + c];
-      assert(id * floats < vertices.size() && "dereference_in_memory: vertex id out of range");
-      std::memcpy(out + c * vertex_bytes, vertices.data() + id * floats, vertex_bytes);
-    }
-    std::memcpy(out + 3 * vertex_bytes, &t, 4);
+    const std::uint32_t* corners = triangles.data() + 3 * std::size_t{t};
+    for (std::size_t c = 0; c < 3; ++c)
+      assert(std::size_t{corners[c]} * layout.floats() < vertices.size() &&
+             "dereference_in_memory: vertex id out of range");
+    store_soup_record(soup.data() + i * out_bytes, layout, vertices.data(), corners, t);
   }
   return soup;
 }

@@ -65,6 +65,15 @@ constexpr std::size_t soup_triangle_id_offset(VertexLayout layout) { return 3 * 
 inline void load_soup_corner(const std::byte* record, VertexLayout layout, int corner, float* out) {
   std::memcpy(out, record + soup_corner_offset(layout, corner), layout.bytes());
 }
+// Writes the soup record of triangle `triangle` whose corners are the vertices corner_ids[0..2]
+// of `vertices` (layout.floats() floats per vertex) to `record` (soup_record_bytes(layout) bytes).
+inline void store_soup_record(std::byte* record, VertexLayout layout, const float* vertices,
+                              const std::uint32_t* corner_ids, std::uint32_t triangle) {
+  for (int c = 0; c < 3; ++c)
+    std::memcpy(record + soup_corner_offset(layout, c),
+                vertices + std::size_t{corner_ids[c]} * layout.floats(), layout.bytes());
+  std::memcpy(record + soup_triangle_id_offset(layout), &triangle, sizeof triangle);
+}
 inline TriangleId load_soup_triangle_id(const std::byte* record, VertexLayout layout) {
   std::uint32_t id;
   std::memcpy(&id, record + soup_triangle_id_offset(layout), sizeof id);
