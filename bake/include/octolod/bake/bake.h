@@ -71,10 +71,11 @@ struct BakeOptions {
   unsigned threads = 0;
   // Take the soup stage's out-of-core path even when the vertices would fit (tests, benchmarks).
   bool force_out_of_core = false;
-  // In core, when the indexed mesh fits in the budget with 28 bytes per triangle to spare and
-  // 3 * max_depth + log2(triangles) <= 64 bits: sort the triangles by cell in memory and gather
-  // each leaf's records from the mesh instead of producing the soup and sorting it (same
-  // output, several times faster). false: always the soup path (tests compare the two).
+  // In core, when the indexed mesh fits in the budget with 36 bytes per triangle to spare (its
+  // 12 bytes of indices, keys and triangle ids with their sort scratch): sort the triangles by
+  // cell in memory and gather each leaf's records from the mesh instead of producing the soup
+  // and sorting it (same output, several times faster). false: always the soup path (tests
+  // compare the two).
   bool in_memory_octree = true;
   // Install the SIGINT/SIGTERM cleanup (temp_dir.h): on a signal the temporary directories are
   // removed and the process dies by that signal. For programs; libraries embedding the bake
