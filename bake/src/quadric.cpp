@@ -6,6 +6,7 @@
 #include <array>
 #include <cassert>
 #include <cmath>
+#include <type_traits>
 
 namespace octolod::bake {
 namespace {
@@ -15,6 +16,26 @@ using Vector = std::array<double, kMaxQuadricDim>;
 
 std::size_t packed_index(int n, int i, int j) {  // i <= j
   return static_cast<std::size_t>(i * n - i * (i - 1) / 2 + (j - i));
+}
+
+// Calls f(std::integral_constant<int, m>{}) for the run-time dimension m (1..kMaxQuadricDim):
+// a size known at compile time lets the loops of the hot kernels unroll and vectorize.
+template <typename F>
+decltype(auto) with_fixed_dimension(int m, F&& f) {
+  static_assert(kMaxQuadricDim == 11, "one case per dimension below kMaxQuadricDim");
+  switch (m) {
+    case 1: return f(std::integral_constant<int, 1>{});
+    case 2: return f(std::integral_constant<int, 2>{});
+    case 3: return f(std::integral_constant<int, 3>{});
+    case 4: return f(std::integral_constant<int, 4>{});
+    case 5: return f(std::integral_constant<int, 5>{});
+    case 6: return f(std::integral_constant<int, 6>{});
+    case 7: return f(std::integral_constant<int, 7>{});
+    case 8: return f(std::integral_constant<int, 8>{});
+    case 9: return f(std::integral_constant<int, 9>{});
+    case 10: return f(std::integral_constant<int, 10>{});
+    default: return f(std::integral_constant<int, kMaxQuadricDim>{});
+  }
 }
 
 double dot(int n, const double* x, const double* y) {
@@ -113,22 +134,12 @@ bool solve_well_conditioned_fixed(const Matrix& mat, const double* rhs, double* 
   return true;
 }
 
-// solve_well_conditioned_fixed for m = 1..kMaxQuadricDim: a size known at compile time lets the
-// factorization's loops unroll (the attribute solves, m = 2..8, run once per output wedge).
+// solve_well_conditioned_fixed for the run-time m (the attribute solves, m = 2..8, run once per
+// output wedge).
 bool solve_well_conditioned(int m, const Matrix& mat, const double* rhs, double* x) {
-  switch (m) {
-    case 1: return solve_well_conditioned_fixed<1>(mat, rhs, x);
-    case 2: return solve_well_conditioned_fixed<2>(mat, rhs, x);
-    case 3: return solve_well_conditioned_fixed<3>(mat, rhs, x);
-    case 4: return solve_well_conditioned_fixed<4>(mat, rhs, x);
-    case 5: return solve_well_conditioned_fixed<5>(mat, rhs, x);
-    case 6: return solve_well_conditioned_fixed<6>(mat, rhs, x);
-    case 7: return solve_well_conditioned_fixed<7>(mat, rhs, x);
-    case 8: return solve_well_conditioned_fixed<8>(mat, rhs, x);
-    case 9: return solve_well_conditioned_fixed<9>(mat, rhs, x);
-    case 10: return solve_well_conditioned_fixed<10>(mat, rhs, x);
-    default: return solve_well_conditioned_fixed<kMaxQuadricDim>(mat, rhs, x);
-  }
+  return with_fixed_dimension(m, [&](auto fixed) {
+    return solve_well_conditioned_fixed<decltype(fixed)::value>(mat, rhs, x);
+  });
 }
 
 // x = x0 + M^+ (rhs - M x0) for the symmetric m x m matrix M (row-major, stride
@@ -215,17 +226,9 @@ void triangle_quadric_fixed(const double* p, const double* q, const double* r, d
 void triangle_quadric(int n, const double* p, const double* q, const double* r, double weight,
                       double* out) {
   assert(n >= 3 && n <= kMaxQuadricDim && "quadric dimension must be 3..11");
-  switch (n) {
-    case 3: return triangle_quadric_fixed<3>(p, q, r, weight, out);
-    case 4: return triangle_quadric_fixed<4>(p, q, r, weight, out);
-    case 5: return triangle_quadric_fixed<5>(p, q, r, weight, out);
-    case 6: return triangle_quadric_fixed<6>(p, q, r, weight, out);
-    case 7: return triangle_quadric_fixed<7>(p, q, r, weight, out);
-    case 8: return triangle_quadric_fixed<8>(p, q, r, weight, out);
-    case 9: return triangle_quadric_fixed<9>(p, q, r, weight, out);
-    case 10: return triangle_quadric_fixed<10>(p, q, r, weight, out);
-    default: return triangle_quadric_fixed<kMaxQuadricDim>(p, q, r, weight, out);
-  }
+  with_fixed_dimension(n, [&](auto fixed) {
+    triangle_quadric_fixed<decltype(fixed)::value>(p, q, r, weight, out);
+  });
 }
 
 void plane_quadric(const double* normal, const double* p, double weight, double* out) {
