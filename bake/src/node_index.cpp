@@ -2,24 +2,20 @@
 // node_index.h. Open addressing with linear probing over the vertex records' bit patterns.
 #include "node_index.h"
 
-#include <bit>
 #include <cstring>
 
+#include "flat_hash.h"
 #include "octolod/bake/soup.h"
 
 namespace octolod::bake {
 namespace {
 
 // Hashes the position only: vertices that differ elsewhere (a seam) share a probe sequence and
-// are told apart by the full comparison, and the hash costs 3 rounds instead of up to 11.
+// are told apart by the full comparison.
 std::uint64_t hash_position(const float* v) {
-  std::uint64_t h = 0x9e3779b97f4a7c15ull;
-  for (int i = 0; i < 3; ++i) {
-    h ^= std::bit_cast<std::uint32_t>(v[i]);
-    h *= 0xff51afd7ed558ccdull;
-    h ^= h >> 29;
-  }
-  return h;
+  std::uint32_t words[3];
+  std::memcpy(words, v, sizeof words);
+  return hash_words(words, 3);
 }
 
 }  // namespace
