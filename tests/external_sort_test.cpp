@@ -1,6 +1,7 @@
-// External k-way merge sort (seed 3.3, 4.2.2): sorted and stable output on the in-core fast path
-// and the external path (multi-pass merges with a tiny budget), identical for any budget and
-// thread count, temporary files gone when the sort is done or fails (simulated ENOSPC, EIO).
+// External k-way merge sort (seed 3.3, 4.2.2) and the bucket (MSD radix) sort for bounded keys:
+// sorted and stable output on the in-core fast path and the external paths (multi-pass merges,
+// buckets distributed again, with tiny budgets), identical for any budget and thread count,
+// temporary files gone when the sort is done or fails (simulated ENOSPC, EIO).
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -10,11 +11,13 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <iterator>
 #include <random>
 #include <string>
 #include <vector>
 
+#include "bucket_sort.h"
 #include "octolod/bake/external_sort.h"
 #include "record_file.h"
 
@@ -73,10 +76,25 @@ struct SortRun {
   SortStats stats;
 };
 
+using SorterFactory =
+    std::function<Result<std::unique_ptr<RecordSorter>>(const SortOptions& options)>;
+
+Result<std::unique_ptr<RecordSorter>> merge_sorter(const SortOptions& options) {
+  return RecordSorter::create(sizeof(Rec), sort_key_u32_at(0, sizeof(Rec)), options);
+}
+
+// A bucket sorter for keys below 2^key_bits.
+SorterFactory bucket_sorter(unsigned key_bits) {
+  return [key_bits](const SortOptions& options) {
+    return create_bucket_sorter(sizeof(Rec), sort_key_u32_at(0, sizeof(Rec)), key_bits, options);
+  };
+}
+
 // Pushes `in` in uneven chunks, then drains the sorter, checking RecordSorter::keys().
-SortRun run_sorter(const std::vector<Rec>& in, const SortOptions& options) {
+SortRun run_sorter(const std::vector<Rec>& in, const SortOptions& options,
+                   const SorterFactory& make = merge_sorter) {
   SortRun run;
-  auto sorter = RecordSorter::create(sizeof(Rec), sort_key_u32_at(0, sizeof(Rec)), options);
+  auto sorter = make(options);
   EXPECT_TRUE(sorter.ok()) << sorter.status().message();
   if (!sorter.ok()) return run;
   std::size_t pos = 0;
@@ -273,41 +291,59 @@ TEST(ExternalSort, PartialRecordInInputIsAnIoError) {
 
 // The sort fails cleanly wherever the disk fills up: io error naming a file and the reason,
 // and no run file left behind.
-TEST(ExternalSort, OutOfSpaceAnywhereIsAnIoErrorAndLeavesNoFiles) {
-  WorkDir dir;
+// Pushes `in` at once, finishes and drains the sorter; the first error.
+Status sort_all(const std::vector<Rec>& in, const SortOptions& options, const SorterFactory& make) {
+  auto sorter = make(options);
+  if (!sorter.ok()) return sorter.status();
+  Status status = sorter.value()->push(std::as_bytes(std::span<const Rec>(in)));
+  if (status.ok()) status = sorter.value()->finish();
+  while (status.ok()) {
+    auto block = sorter.value()->next();
+    if (!block.ok()) status = block.status();
+    else if (block->empty()) break;
+  }
+  return status;
+}
+
+void expect_out_of_space_handled(std::uint64_t budget, const SorterFactory& make) {
+  WorkDir dir("-" + std::to_string(budget));
   const auto in = make_records(30000, 500, 8);
   SortOptions options;
-  options.memory_budget_bytes = 16 << 10;
+  options.memory_budget_bytes = budget;
   options.work_dir = dir.path();
-  const std::uint64_t total = in.size() * sizeof(Rec);
-  for (const std::uint64_t after : {std::uint64_t{0}, std::uint64_t{5000}, total / 2, total,
-                                    total + total / 2, 3 * total}) {
+  std::uint64_t total = 0;  // bytes the sort writes to its files
+  {
+    ScopedIoFault never(ScopedIoFault::Op::write, std::uint64_t{1} << 40, ENOSPC);
+    ASSERT_TRUE(sort_all(in, options, make).ok());
+    total = never.bytes_seen();
+  }
+  ASSERT_GE(total, in.size() * sizeof(Rec));  // everything goes to disk at least once
+  for (const std::uint64_t after : {std::uint64_t{0}, std::uint64_t{5000}, total / 3, total / 2,
+                                    total - 1, total}) {
     Status failure;
     {
       ScopedIoFault fault(ScopedIoFault::Op::write, after, ENOSPC);
-      auto sorter = RecordSorter::create(sizeof(Rec), sort_key_u32_at(0, sizeof(Rec)), options);
-      ASSERT_TRUE(sorter.ok());
-      failure = sorter.value()->push(std::as_bytes(std::span<const Rec>(in)));
-      if (failure.ok()) failure = sorter.value()->finish();
-      while (failure.ok()) {
-        auto block = sorter.value()->next();
-        if (!block.ok()) failure = block.status();
-        else if (block->empty()) break;
-      }
+      failure = sort_all(in, options, make);
     }
     EXPECT_EQ(dir.file_count(), 0u) << "fault after " << after;
-    if (after < 3 * total) {
+    if (after < total) {
       ASSERT_FALSE(failure.ok()) << "fault after " << after;
       EXPECT_EQ(failure.code(), ErrorCode::io);
       EXPECT_NE(failure.message().find("No space left on device"), std::string::npos)
           << failure.message();
       EXPECT_NE(failure.message().find(dir.path().string()), std::string::npos)
           << failure.message();
+    } else {
+      EXPECT_TRUE(failure.ok()) << failure.message();
     }
   }
 }
 
-TEST(ExternalSort, ReadErrorDuringMergeIsAnIoErrorAndLeavesNoFiles) {
+TEST(ExternalSort, OutOfSpaceAnywhereIsAnIoErrorAndLeavesNoFiles) {
+  expect_out_of_space_handled(16 << 10, merge_sorter);
+}
+
+void expect_read_error_handled(const SorterFactory& make) {
   WorkDir dir;
   const auto in = make_records(30000, 500, 9);
   SortOptions options;
@@ -316,20 +352,104 @@ TEST(ExternalSort, ReadErrorDuringMergeIsAnIoErrorAndLeavesNoFiles) {
   Status failure;
   {
     ScopedIoFault fault(ScopedIoFault::Op::read, in.size() * sizeof(Rec) / 3, EIO);
-    auto sorter = RecordSorter::create(sizeof(Rec), sort_key_u32_at(0, sizeof(Rec)), options);
-    ASSERT_TRUE(sorter.ok());
-    failure = sorter.value()->push(std::as_bytes(std::span<const Rec>(in)));
-    if (failure.ok()) failure = sorter.value()->finish();
-    while (failure.ok()) {
-      auto block = sorter.value()->next();
-      if (!block.ok()) failure = block.status();
-      else if (block->empty()) break;
-    }
+    failure = sort_all(in, options, make);
   }
   ASSERT_FALSE(failure.ok());
   EXPECT_EQ(failure.code(), ErrorCode::io);
   EXPECT_NE(failure.message().find("Input/output error"), std::string::npos) << failure.message();
   EXPECT_EQ(dir.file_count(), 0u);
+}
+
+TEST(ExternalSort, ReadErrorDuringMergeIsAnIoErrorAndLeavesNoFiles) {
+  expect_read_error_handled(merge_sorter);
+}
+
+// The bucket sort.
+
+TEST(BucketSort, FitsBudgetSortsInCoreWithoutTempFiles) {
+  WorkDir dir;
+  const auto in = make_records(5000, 300, 11);
+  SortOptions options;
+  options.memory_budget_bytes = 4 << 20;
+  options.work_dir = dir.path();
+  const SortRun run = run_sorter(in, options, bucket_sorter(9));
+  EXPECT_TRUE(same(run.out, stable_sorted(in)));
+  EXPECT_TRUE(run.stats.in_core);
+  EXPECT_EQ(run.stats.runs, 0u);
+  EXPECT_EQ(run.stats.bytes_written, 0u);
+  EXPECT_EQ(run.stats.records, in.size());
+  EXPECT_EQ(dir.file_count(), 0u);
+}
+
+// 20-bit keys, 64 KiB: buckets of the first level (9 bits) are too large for memory and are
+// distributed again by the next 9 bits, then the last 2.
+TEST(BucketSort, TinyBudgetDistributesAgainAndStaysStable) {
+  WorkDir dir;
+  const auto in = make_records(60000, 1u << 20, 12);
+  for (const unsigned threads : {1u, 2u}) {
+    SortOptions options;
+    options.memory_budget_bytes = 64 << 10;
+    options.work_dir = dir.path();
+    options.threads = threads;
+    const SortRun run = run_sorter(in, options, bucket_sorter(20));
+    EXPECT_TRUE(same(run.out, stable_sorted(in))) << "threads " << threads;
+    EXPECT_FALSE(run.stats.in_core);
+    EXPECT_GE(run.stats.merge_passes, 2u);
+    EXPECT_GT(run.stats.runs, 8u);
+    EXPECT_EQ(run.stats.bytes_read, run.stats.bytes_written);
+    EXPECT_EQ(dir.file_count(), 0u);
+  }
+}
+
+// One key for every record: no bits to distribute by, the bucket larger than memory comes out
+// as it went in.
+TEST(BucketSort, OneKeyLargerThanMemoryKeepsInputOrder) {
+  WorkDir dir;
+  auto in = make_records(30000, 1, 13);
+  for (Rec& r : in) r.key = 5;
+  SortOptions options;
+  options.memory_budget_bytes = 64 << 10;
+  options.work_dir = dir.path();
+  const SortRun run = run_sorter(in, options, bucket_sorter(4));
+  EXPECT_TRUE(same(run.out, in));
+  EXPECT_EQ(dir.file_count(), 0u);
+}
+
+TEST(BucketSort, OutputIsTheSameForAnyBudgetAndThreadCount) {
+  WorkDir dir;
+  const auto in = make_records(40000, 1u << 16, 14);
+  const auto expected = stable_sorted(in);
+  for (const std::uint64_t budget : {std::uint64_t{32} << 10, std::uint64_t{256} << 10,
+                                     std::uint64_t{4} << 20}) {
+    for (const unsigned threads : {1u, 2u}) {
+      SortOptions options;
+      options.memory_budget_bytes = budget;
+      options.work_dir = dir.path();
+      options.threads = threads;
+      EXPECT_TRUE(same(run_sorter(in, options, bucket_sorter(16)).out, expected))
+          << "budget " << budget << " threads " << threads;
+    }
+  }
+  EXPECT_EQ(dir.file_count(), 0u);
+}
+
+TEST(BucketSort, EmptyInputAndTooSmallBudget) {
+  WorkDir dir;
+  SortOptions options;
+  options.work_dir = dir.path();
+  EXPECT_TRUE(run_sorter({}, options, bucket_sorter(9)).out.empty());
+  options.memory_budget_bytes = 1000;
+  auto sorter = bucket_sorter(9)(options);
+  ASSERT_FALSE(sorter.ok());
+  EXPECT_EQ(sorter.status().code(), ErrorCode::usage);
+}
+
+TEST(BucketSort, OutOfSpaceAnywhereIsAnIoErrorAndLeavesNoFiles) {
+  expect_out_of_space_handled(64 << 10, bucket_sorter(9));
+}
+
+TEST(BucketSort, ReadErrorIsAnIoErrorAndLeavesNoFiles) {
+  expect_read_error_handled(bucket_sorter(9));
 }
 
 }  // namespace

@@ -5,9 +5,10 @@
 
 #include <algorithm>
 #include <cassert>
-#include <chrono>
+#include <condition_variable>
 #include <cstring>
 #include <limits>
+#include <mutex>
 #include <string>
 #include <thread>
 #include <utility>
@@ -17,6 +18,7 @@
 #include "page_array.h"
 #include "radix_sort.h"
 #include "record_file.h"
+#include "stopwatch.h"
 
 namespace octolod::bake {
 namespace {
@@ -27,20 +29,6 @@ constexpr std::size_t kMinBlockBytes = 4096;
 constexpr std::size_t kParallelSortMin = 1 << 16;
 // Bytes per record of the run buffer's key and order arrays (keys + order, each twice).
 constexpr std::size_t kRunOverhead = 2 * (sizeof(std::uint64_t) + sizeof(std::uint32_t));
-
-class Stopwatch {
- public:
-  explicit Stopwatch(double& total) : total_(total), start_(std::chrono::steady_clock::now()) {}
-  ~Stopwatch() {
-    total_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
-  }
-  Stopwatch(const Stopwatch&) = delete;
-  Stopwatch& operator=(const Stopwatch&) = delete;
-
- private:
-  double& total_;
-  std::chrono::steady_clock::time_point start_;
-};
 
 // A range of the run buffer, sorted: one or two sorted halves (sorted on two threads) read out
 // in order by a two-way merge.
@@ -263,6 +251,7 @@ class ExternalSorter final : public RecordSorter {
         run_capacity_(run_capacity) {}
   ~ExternalSorter() override {
     if (spiller_.joinable()) spiller_.join();
+    stop_merger();
   }
   ExternalSorter(const ExternalSorter&) = delete;
   ExternalSorter& operator=(const ExternalSorter&) = delete;
@@ -318,6 +307,7 @@ class ExternalSorter final : public RecordSorter {
     OCTOLOD_RETURN_IF_ERROR(final_.open(std::move(runs_), record_bytes_, block, &key_, &stats_));
     runs_.clear();
     state_ = State::merging;
+    if (options_.threads >= 2 && out_bytes_ / record_bytes_ >= 2) start_merger();
     return {};
   }
 
@@ -329,17 +319,20 @@ class ExternalSorter final : public RecordSorter {
     if (state_ == State::in_core) {
       n = sorted_.emit(out_.get(), out_keys_.get(), max);
       if (sorted_.exhausted()) run_.release();
+    } else if (merger_.joinable()) {
+      return next_merged();
     } else {
       auto emitted = final_.emit(out_.get(), out_keys_.get(), max);
       if (!emitted.ok()) return emitted.status();
       n = emitted.value();
     }
     out_key_count_ = n;
+    out_key_first_ = 0;
     return std::span<const std::byte>(out_.get(), n * record_bytes_);
   }
 
   std::span<const std::uint64_t> keys() const override {
-    return std::span<const std::uint64_t>(out_keys_.get(), out_key_count_);
+    return std::span<const std::uint64_t>(out_keys_.get() + out_key_first_, out_key_count_);
   }
 
   const SortStats& stats() const override { return stats_; }
@@ -347,6 +340,68 @@ class ExternalSorter final : public RecordSorter {
 
  private:
   enum class State { input, in_core, merging };
+
+  // The final merge on a helper thread (threads >= 2): the output buffer works as two halves,
+  // the helper filling one while the caller consumes the other, so merging overlaps with the
+  // caller's work on the records. The blocks come in the same order as without it.
+  void start_merger() {
+    merge_block_records_ = out_bytes_ / record_bytes_ / 2;
+    merger_ = std::thread([this] {
+      for (int b = 0;; b ^= 1) {
+        {
+          std::unique_lock lock(merge_mutex_);
+          merge_cv_.wait(lock, [&] { return merge_stop_ || !block_busy_[b]; });
+          if (merge_stop_) return;
+          block_busy_[b] = true;
+        }
+        auto emitted = final_.emit(out_.get() + b * merge_block_records_ * record_bytes_,
+                                   out_keys_.get() + b * merge_block_records_,
+                                   merge_block_records_);
+        {
+          std::lock_guard lock(merge_mutex_);
+          block_ready_[b] = true;
+          block_records_[b] = emitted.ok() ? emitted.value() : 0;
+          if (!emitted.ok()) merge_status_ = emitted.status();
+        }
+        merge_cv_.notify_all();
+        if (!emitted.ok() || emitted.value() == 0) return;
+      }
+    });
+  }
+
+  // next() with the merger running: hands back the block handed out last, takes the next.
+  Result<std::span<const std::byte>> next_merged() {
+    std::size_t n = 0;
+    Status status;
+    {
+      std::unique_lock lock(merge_mutex_);
+      if (handed_out_ >= 0) block_busy_[handed_out_] = false;
+      merge_cv_.notify_all();
+      const int b = next_block_;
+      merge_cv_.wait(lock, [&] { return block_ready_[b]; });
+      block_ready_[b] = false;
+      n = block_records_[b];
+      status = merge_status_;
+      handed_out_ = b;
+      next_block_ = b ^ 1;
+    }
+    if (!status.ok() || n == 0) merger_.join();  // the helper has stopped
+    if (!status.ok()) return status;
+    out_key_count_ = n;
+    out_key_first_ = static_cast<std::size_t>(handed_out_) * merge_block_records_;
+    return std::span<const std::byte>(out_.get() + out_key_first_ * record_bytes_,
+                                      n * record_bytes_);
+  }
+
+  void stop_merger() {
+    if (!merger_.joinable()) return;
+    {
+      std::lock_guard lock(merge_mutex_);
+      merge_stop_ = true;
+    }
+    merge_cv_.notify_all();
+    merger_.join();
+  }
 
   // reserve() without the stopwatch (push() has its own).
   Result<std::span<std::byte>> room(std::size_t max_records) {
@@ -511,7 +566,21 @@ class ExternalSorter final : public RecordSorter {
   KWayMerge final_;
   PageArray<std::byte> out_;
   PageArray<std::uint64_t> out_keys_;  // keys of the records in out_
-  std::size_t out_key_count_ = 0;
+  std::size_t out_key_first_ = 0;      // the block next() returned last: its first record
+  std::size_t out_key_count_ = 0;      // and its record count
+  // The merger thread (start_merger) and its two blocks of out_, guarded by merge_mutex_:
+  // busy while the merger fills it or the caller holds it, ready once filled and not yet taken.
+  std::thread merger_;
+  std::mutex merge_mutex_;
+  std::condition_variable merge_cv_;
+  std::size_t merge_block_records_ = 0;
+  bool block_busy_[2] = {false, false};
+  bool block_ready_[2] = {false, false};
+  std::size_t block_records_[2] = {0, 0};
+  Status merge_status_;
+  bool merge_stop_ = false;
+  int handed_out_ = -1;  // block the caller holds (caller's thread only)
+  int next_block_ = 0;   // block the caller takes next (caller's thread only)
   SortStats stats_;
 };
 

@@ -84,22 +84,37 @@ class MortonQuantizer {
   MortonQuantizer(const RootCube& cube, std::uint32_t depth)
       : origin_(cube.origin),
         scale_(std::ldexp(1.0, static_cast<int>(depth)) / cube.size),
-        last_(depth == 0 ? 0 : (std::uint32_t{1} << depth) - 1) {}
+        last_(depth == 0 ? 0 : (std::uint32_t{1} << depth) - 1) {
+    for (int a = 0; a < 3; ++a) origin3_[a] = 3 * origin_[a];
+    third_scale_ = scale_ / 3;
+  }
 
   // Key of the point p (model units); points outside the cube clamp to its border cells, NaN
   // coordinates to the lower one.
   std::uint64_t key(const double p[3]) const {
-    std::uint32_t q[3];
-    for (int a = 0; a < 3; ++a) {
-      const double t = std::floor((p[a] - origin_[a]) * scale_);
-      q[a] = !(t > 0) ? 0u : t >= last_ ? last_ : static_cast<std::uint32_t>(t);
-    }
-    return morton_encode(q[0], q[1], q[2]);
+    return encode((p[0] - origin_[0]) * scale_, (p[1] - origin_[1]) * scale_,
+                  (p[2] - origin_[2]) * scale_);
+  }
+  // Key of the mean of three points given their sum `s` (the division folded into the scale).
+  std::uint64_t key_of_mean3(const double s[3]) const {
+    return encode((s[0] - origin3_[0]) * third_scale_, (s[1] - origin3_[1]) * third_scale_,
+                  (s[2] - origin3_[2]) * third_scale_);
   }
 
  private:
+  // Cell coordinates t (in cells from the origin) to the key: floor, clamped to the cube.
+  std::uint64_t encode(double t0, double t1, double t2) const {
+    return morton_encode(cell(t0), cell(t1), cell(t2));
+  }
+  std::uint32_t cell(double t) const {
+    // For t > 0 truncation is floor; NaN fails t > 0.
+    return !(t > 0) ? 0u : t >= last_ ? last_ : static_cast<std::uint32_t>(t);
+  }
+
   std::array<double, 3> origin_;
+  std::array<double, 3> origin3_;
   double scale_;
+  double third_scale_;
   std::uint32_t last_;
 };
 
@@ -107,10 +122,9 @@ class MortonQuantizer {
 // units) taken in double precision.
 inline std::uint64_t centroid_key(const MortonQuantizer& quantizer, const float* a,
                                   const float* b, const float* c) {
-  double centroid[3];
-  for (int i = 0; i < 3; ++i)
-    centroid[i] = (static_cast<double>(a[i]) + b[i] + c[i]) / 3.0;
-  return quantizer.key(centroid);
+  double sum[3];
+  for (int i = 0; i < 3; ++i) sum[i] = static_cast<double>(a[i]) + b[i] + c[i];
+  return quantizer.key_of_mean3(sum);
 }
 
 }  // namespace octolod::bake

@@ -42,7 +42,8 @@ std::size_t whole_records(std::size_t buffer_bytes, std::size_t record_bytes) {
 
 }  // namespace
 
-ScopedIoFault::ScopedIoFault(Op op, std::uint64_t after_bytes, int error) {
+ScopedIoFault::ScopedIoFault(Op op, std::uint64_t after_bytes, int error)
+    : after_bytes_(after_bytes) {
   assert(g_fault_op.load() == kNoFault && "ScopedIoFault instances do not nest");
   g_fault_bytes_left.store(static_cast<std::int64_t>(after_bytes));
   g_fault_errno.store(error);
@@ -50,6 +51,11 @@ ScopedIoFault::ScopedIoFault(Op op, std::uint64_t after_bytes, int error) {
 }
 
 ScopedIoFault::~ScopedIoFault() { g_fault_op.store(kNoFault); }
+
+std::uint64_t ScopedIoFault::bytes_seen() const {
+  return static_cast<std::uint64_t>(static_cast<std::int64_t>(after_bytes_) -
+                                    g_fault_bytes_left.load());
+}
 
 // ---------------------------------------------------------------------------------------------
 // RecordWriter
@@ -207,15 +213,11 @@ RecordReader::~RecordReader() {
   if (fd_ >= 0) ::close(fd_);
 }
 
-Status RecordReader::refill() {
-  // Only called when the buffer is exhausted; fills it with whole records.
-  const std::uint64_t left_bytes = (total_ - consumed_) * record_bytes_;
-  const std::size_t want =
-      static_cast<std::size_t>(std::min<std::uint64_t>(capacity_, left_bytes));
+Status RecordReader::read_fully(std::byte* dst, std::size_t bytes) {
   std::size_t got = 0;
-  while (got < want) {
+  while (got < bytes) {
     ssize_t n = -1;
-    if (!fault_fires(kReadFault, want - got)) n = ::read(fd_, buffer_.get() + got, want - got);
+    if (!fault_fires(kReadFault, bytes - got)) n = ::read(fd_, dst + got, bytes - got);
     if (n < 0) {
       if (errno == EINTR) continue;
       return os_error("cannot read", path_, errno);
@@ -225,9 +227,27 @@ Status RecordReader::refill() {
     }
     got += static_cast<std::size_t>(n);
   }
-  begin_ = 0;
-  end_ = got;
   return {};
+}
+
+Status RecordReader::refill() {
+  // Only called when the buffer is exhausted; fills it with whole records.
+  const std::uint64_t left_bytes = (total_ - consumed_) * record_bytes_;
+  const std::size_t want =
+      static_cast<std::size_t>(std::min<std::uint64_t>(capacity_, left_bytes));
+  OCTOLOD_RETURN_IF_ERROR(read_fully(buffer_.get(), want));
+  begin_ = 0;
+  end_ = want;
+  return {};
+}
+
+Result<std::size_t> RecordReader::read_into(std::span<std::byte> dst) {
+  assert(begin_ == end_ && "RecordReader::read_into with buffered records left");
+  const std::size_t n = static_cast<std::size_t>(
+      std::min<std::uint64_t>(total_ - consumed_, dst.size() / record_bytes_));
+  OCTOLOD_RETURN_IF_ERROR(read_fully(dst.data(), n * record_bytes_));
+  consumed_ += n;
+  return n;
 }
 
 Result<std::span<const std::byte>> RecordReader::read(std::size_t max_records) {

@@ -71,6 +71,10 @@ class RecordReader {
   // The next up to `max_records` records (at least one unless the file is exhausted, then
   // empty). Valid until the next call on the reader.
   Result<std::span<const std::byte>> read(std::size_t max_records = SIZE_MAX);
+  // Reads the next min(records_left(), dst.size() / record_bytes()) records straight into
+  // `dst`, bypassing the buffer (which must be empty: no read() since open, or its records all
+  // taken); returns how many.
+  Result<std::size_t> read_into(std::span<std::byte> dst);
 
   std::uint64_t record_count() const { return total_; }
   std::uint64_t records_left() const { return total_ - consumed_; }
@@ -80,6 +84,7 @@ class RecordReader {
  private:
   RecordReader() = default;
   Status refill();
+  Status read_fully(std::byte* dst, std::size_t bytes);
 
   std::filesystem::path path_;
   int fd_ = -1;
@@ -100,8 +105,13 @@ class ScopedIoFault {
   enum class Op { write, read };
   ScopedIoFault(Op op, std::uint64_t after_bytes, int error);
   ~ScopedIoFault();
+  // Bytes the hooked system calls have passed (or tried to) since construction.
+  std::uint64_t bytes_seen() const;
   ScopedIoFault(const ScopedIoFault&) = delete;
   ScopedIoFault& operator=(const ScopedIoFault&) = delete;
+
+ private:
+  std::uint64_t after_bytes_;
 };
 
 }  // namespace octolod::bake

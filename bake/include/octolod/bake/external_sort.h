@@ -8,7 +8,9 @@
 //      as two halves: a helper thread sorts and writes one while the caller fills the other.
 //   2. Merge: the runs are merged with the largest fan-in the budget allows (loser tree); only
 //      when there are more runs than that are intermediate merge passes made, each merging
-//      consecutive runs so the sort stays stable. The final pass is streamed to the caller.
+//      consecutive runs so the sort stays stable. The final pass is streamed to the caller;
+//      with two threads a helper thread merges the next block while the caller works on the
+//      last one.
 //   3. In-core fast path: when every record fits in the run buffer, one in-memory sort and no
 //      temporary file at all.
 //
@@ -47,8 +49,8 @@ struct SortOptions {
   // Where run files go; the system temporary directory when empty.
   std::filesystem::path work_dir;
   // 1: sort and write runs on the calling thread; 2 or more: also use one helper thread (run
-  // halves sorted in parallel, runs written while the caller pushes more). The output is
-  // identical for any value.
+  // halves sorted in parallel, runs written while the caller pushes more, the final merge a
+  // block ahead of the caller). The output is identical for any value.
   unsigned threads = 2;
   // Largest buffer per file (bigger blocks stop paying off); smaller when the budget demands.
   std::size_t max_io_buffer_bytes = std::size_t{1} << 20;
@@ -89,6 +91,8 @@ class RecordSorter {
   // when the records entered the sort). Valid until the next call to next().
   virtual std::span<const std::uint64_t> keys() const = 0;
 
+  // Complete once next() has returned the empty block; while the final merge runs on its
+  // helper thread (threads >= 2), read it only before finish() or after the end.
   virtual const SortStats& stats() const = 0;
   virtual std::size_t record_bytes() const = 0;
 };

@@ -1,0 +1,409 @@
+// External MSD radix sort (bucket_sort.h): records distributed into bucket files by the top
+// bits of their key, each bucket read back whole and radix sorted in memory.
+#include "bucket_sort.h"
+
+#include <algorithm>
+#include <bit>
+#include <cassert>
+#include <cstring>
+#include <optional>
+#include <string>
+#include <thread>
+#include <utility>
+#include <vector>
+
+#include "octolod/bake/temp_file.h"
+#include "page_array.h"
+#include "radix_sort.h"
+#include "record_file.h"
+#include "stopwatch.h"
+
+namespace octolod::bake {
+namespace {
+
+constexpr unsigned kMaxFanBits = 9;              // 512 buckets per level
+constexpr std::size_t kMinWriterBytes = 4096;    // a bucket file's buffer, at least
+constexpr std::size_t kMaxWriterBytes = 1 << 20;  // ... and at most
+constexpr std::size_t kMaxBlockBytes = 1 << 20;   // next()'s blocks, at most
+// Bytes per record held in memory for sorting: its key and order, each with radix scratch.
+constexpr std::size_t kSortBytes = 2 * (sizeof(std::uint64_t) + sizeof(std::uint32_t));
+
+// A bucket file: records of the bucket's prefix, in input order.
+struct Bucket {
+  TempFile file;
+  std::uint64_t records = 0;
+  unsigned low_bits = 0;  // key bits below the bucket's prefix (0: its keys are all equal)
+};
+
+// The buckets of one distribution, in key order; `next` is the first not yet taken.
+struct Level {
+  std::vector<Bucket> buckets;
+  std::size_t next = 0;
+};
+
+class BucketSorter final : public RecordSorter {
+ public:
+  struct Sizes {
+    std::size_t stage_records = 0;  // the stage, and the largest bucket sorted in memory
+    std::size_t block_records = 0;  // next()'s blocks, and reads of a bucket distributed again
+    unsigned fan_bits = 0;          // log2 of the buckets per level
+    std::size_t writer_bytes = 0;   // each bucket file's buffer
+  };
+
+  BucketSorter(std::size_t record_bytes, SortKeyFn key, unsigned key_bits,
+               const SortOptions& options, const Sizes& sizes)
+      : record_bytes_(record_bytes),
+        key_(std::move(key)),
+        key_bits_(key_bits),
+        options_(options),
+        sizes_(sizes) {}
+  ~BucketSorter() override {
+    if (distributor_.joinable()) distributor_.join();
+  }
+  BucketSorter(const BucketSorter&) = delete;
+  BucketSorter& operator=(const BucketSorter&) = delete;
+
+  Status push(std::span<const std::byte> records) override {
+    assert(records.size() % record_bytes_ == 0 && "RecordSorter::push of a partial record");
+    std::size_t n = records.size() / record_bytes_;
+    const std::byte* src = records.data();
+    while (n > 0) {
+      auto space = reserve(n);
+      if (!space.ok()) return space.status();
+      std::memcpy(space->data(), src, space->size());
+      const std::size_t take = space->size() / record_bytes_;
+      commit(take);
+      src += space->size();
+      n -= take;
+    }
+    return {};
+  }
+
+  Result<std::span<std::byte>> reserve(std::size_t max_records) override {
+    assert(!finished_ && "RecordSorter::reserve after finish()");
+    const Stopwatch watch(stats_.seconds);
+    if (!stage_.get()) {
+      allocate_arrays();
+      fill_limit_ = sizes_.stage_records;
+    }
+    if (staged_ == fill_limit_) OCTOLOD_RETURN_IF_ERROR(make_room());
+    const std::size_t n = std::min(max_records, fill_limit_ - staged_);
+    return std::span<std::byte>(stage_.get() + (fill_begin_ + staged_) * record_bytes_,
+                                n * record_bytes_);
+  }
+
+  void commit(std::size_t records) override {
+    assert(staged_ + records <= fill_limit_ && "RecordSorter::commit beyond reserve()");
+    staged_ += records;
+    stats_.records += records;
+  }
+
+  Status finish() override {
+    assert(!finished_ && "RecordSorter::finish called twice");
+    const Stopwatch watch(stats_.seconds);
+    finished_ = true;
+    OCTOLOD_RETURN_IF_ERROR(wait_for_distributor());
+    if (writers_.empty()) {  // everything is in the stage: sort it there
+      stats_.in_core = true;
+      if (staged_ > 0) sort_loaded(stage_.get(), staged_);
+      return {};
+    }
+    OCTOLOD_RETURN_IF_ERROR(distribute(stage_.get() + fill_begin_ * record_bytes_, staged_,
+                                       keys_.get() + fill_begin_));
+    staged_ = 0;
+    OCTOLOD_RETURN_IF_ERROR(close_level(key_bits_));
+    return {};
+  }
+
+  Result<std::span<const std::byte>> next() override {
+    assert(finished_ && "RecordSorter::next before finish()");
+    const Stopwatch watch(stats_.seconds);
+    for (;;) {
+      if (loaded_pos_ < loaded_count_) return emit_loaded();
+      if (stream_) {
+        auto block = stream_->read(sizes_.block_records);
+        if (!block.ok()) return block.status();
+        if (!block->empty()) {
+          stats_.bytes_read += block->size();
+          out_count_ = block->size() / record_bytes_;
+          key_(block.value(), std::span<std::uint64_t>(out_keys_.get(), out_count_));
+          return block.value();
+        }
+        stream_.reset();
+        stream_file_.remove();
+      }
+      while (!levels_.empty() && levels_.back().next == levels_.back().buckets.size())
+        levels_.pop_back();
+      if (levels_.empty()) {
+        out_count_ = 0;
+        return std::span<const std::byte>();
+      }
+      Level& level = levels_.back();
+      Bucket bucket = std::move(level.buckets[level.next++]);
+      if (bucket.records == 0) continue;
+      if (bucket.records <= sizes_.stage_records) {
+        OCTOLOD_RETURN_IF_ERROR(load(std::move(bucket)));
+      } else if (bucket.low_bits == 0) {
+        auto reader = RecordReader::open(bucket.file.path(), record_bytes_,
+                                         sizes_.block_records * record_bytes_);
+        if (!reader.ok()) return reader.status();
+        stream_.emplace(std::move(reader).value());
+        stream_file_ = std::move(bucket.file);
+      } else {
+        OCTOLOD_RETURN_IF_ERROR(distribute_again(std::move(bucket)));
+      }
+    }
+  }
+
+  std::span<const std::uint64_t> keys() const override {
+    return std::span<const std::uint64_t>(out_keys_.get(), out_count_);
+  }
+  const SortStats& stats() const override { return stats_; }
+  std::size_t record_bytes() const override { return record_bytes_; }
+
+ private:
+  void allocate_arrays() {
+    const std::size_t n = sizes_.stage_records;
+    stage_ = PageArray<std::byte>(n * record_bytes_);
+    keys_ = PageArray<std::uint64_t>(n);
+    order_ = PageArray<std::uint32_t>(n);
+    keys_tmp_ = PageArray<std::uint64_t>(n);
+    order_tmp_ = PageArray<std::uint32_t>(n);
+    out_ = PageArray<std::byte>(sizes_.block_records * record_bytes_);
+    out_keys_ = PageArray<std::uint64_t>(sizes_.block_records);
+  }
+
+  // The bucket of `key` in a distribution whose prefix ends above bit `shift`.
+  std::size_t bucket_of(std::uint64_t key, unsigned shift, unsigned bits) const {
+    return bits == 0 ? 0 : static_cast<std::size_t>((key >> shift) & ((std::uint64_t{1} << bits) - 1));
+  }
+
+  // Appends `count` records (their keys computed into `keys`) to the open level's bucket
+  // files: consecutive records of one bucket go in one call.
+  Status distribute(const std::byte* records, std::size_t count, std::uint64_t* keys) {
+    key_(std::span<const std::byte>(records, count * record_bytes_),
+         std::span<std::uint64_t>(keys, count));
+    for (std::size_t i = 0; i < count;) {
+      const std::size_t b = bucket_of(keys[i], shift_, bits_);
+      std::size_t j = i + 1;
+      while (j < count && bucket_of(keys[j], shift_, bits_) == b) ++j;
+      if (!writers_[b]) {
+        files_[b] = make_temp_file(options_.work_dir, "bucket");
+        auto writer = RecordWriter::create(files_[b].path(), record_bytes_, sizes_.writer_bytes);
+        if (!writer.ok()) return writer.status();
+        writers_[b].emplace(std::move(writer).value());
+        ++stats_.runs;
+      }
+      OCTOLOD_RETURN_IF_ERROR(writers_[b]->append(records + i * record_bytes_, j - i));
+      stats_.bytes_written += (j - i) * record_bytes_;
+      i = j;
+    }
+    return {};
+  }
+
+  // Opens a distribution of keys whose bits below `prefix_bits` are still to be used.
+  void open_level(unsigned prefix_bits) {
+    bits_ = std::min(sizes_.fan_bits, prefix_bits);
+    shift_ = prefix_bits - bits_;
+    writers_.clear();
+    writers_.resize(std::size_t{1} << bits_);
+    files_.clear();
+    files_.resize(std::size_t{1} << bits_);
+    depth_ = static_cast<std::uint32_t>(levels_.size() + 1);
+    stats_.fan_in = std::max(stats_.fan_in, static_cast<std::uint32_t>(writers_.size()));
+    stats_.merge_passes = std::max(stats_.merge_passes, depth_);
+  }
+
+  // The filled part of the stage must go to the bucket files before more records fit. With
+  // one thread, or the first time (so that input up to the whole stage stays in core), the
+  // whole stage is distributed now. After that, with two threads, the stage works as two
+  // halves: a helper thread distributes one while the caller fills the other.
+  Status make_room() {
+    OCTOLOD_RETURN_IF_ERROR(wait_for_distributor());
+    const std::size_t begin = fill_begin_;
+    const std::size_t count = staged_;
+    staged_ = 0;
+    if (writers_.empty() || options_.threads < 2) {
+      if (writers_.empty()) open_level(key_bits_);
+      OCTOLOD_RETURN_IF_ERROR(distribute(stage_.get() + begin * record_bytes_, count,
+                                         keys_.get() + begin));
+      if (options_.threads >= 2) fill_limit_ = sizes_.stage_records / 2;
+      fill_begin_ = 0;
+      return {};
+    }
+    distributor_ = std::thread([this, begin, count] {
+      distributor_status_ =
+          distribute(stage_.get() + begin * record_bytes_, count, keys_.get() + begin);
+    });
+    fill_begin_ = begin == 0 ? fill_limit_ : 0;
+    return {};
+  }
+
+  Status wait_for_distributor() {
+    if (!distributor_.joinable()) return {};
+    distributor_.join();
+    return distributor_status_;
+  }
+
+  // Closes the open distribution's files and queues its buckets to be taken next.
+  Status close_level(unsigned prefix_bits) {
+    Level level;
+    level.buckets.resize(writers_.size());
+    for (std::size_t b = 0; b < writers_.size(); ++b) {
+      if (!writers_[b]) continue;
+      level.buckets[b].records = writers_[b]->records_written();
+      OCTOLOD_RETURN_IF_ERROR(writers_[b]->finish());
+      level.buckets[b].file = std::move(files_[b]);
+      level.buckets[b].low_bits = prefix_bits - bits_;
+    }
+    writers_.clear();
+    files_.clear();
+    levels_.push_back(std::move(level));
+    return {};
+  }
+
+  // A bucket too large for memory: distributed by its next bits, a stage at a time.
+  Status distribute_again(Bucket bucket) {
+    auto reader = RecordReader::open(bucket.file.path(), record_bytes_, record_bytes_);
+    if (!reader.ok()) return reader.status();
+    open_level(bucket.low_bits);
+    const std::span<std::byte> stage(stage_.get(), sizes_.stage_records * record_bytes_);
+    while (reader->records_left() > 0) {
+      auto n = reader->read_into(stage);
+      if (!n.ok()) return n.status();
+      stats_.bytes_read += n.value() * record_bytes_;
+      OCTOLOD_RETURN_IF_ERROR(distribute(stage.data(), n.value(), keys_.get()));
+    }
+    bucket.file.remove();
+    return close_level(bucket.low_bits);
+  }
+
+  // Reads a bucket whole into the stage and sorts it there.
+  Status load(Bucket bucket) {
+    auto reader = RecordReader::open(bucket.file.path(), record_bytes_, record_bytes_);
+    if (!reader.ok()) return reader.status();
+    auto n = reader->read_into(
+        std::span<std::byte>(stage_.get(), sizes_.stage_records * record_bytes_));
+    if (!n.ok()) return n.status();
+    if (n.value() != bucket.records) {
+      return io_error("bucket file '" + bucket.file.path().string() + "' holds " +
+                      std::to_string(n.value()) + " records, " +
+                      std::to_string(bucket.records) + " were written");
+    }
+    stats_.bytes_read += n.value() * record_bytes_;
+    bucket.file.remove();
+    sort_loaded(stage_.get(), n.value());
+    return {};
+  }
+
+  void sort_loaded(const std::byte* records, std::size_t count) {
+    key_(std::span<const std::byte>(records, count * record_bytes_),
+         std::span<std::uint64_t>(keys_.get(), count));
+    std::uint64_t* keys = keys_.get();
+    std::uint32_t* order = order_.get();
+    std::uint64_t* keys_tmp = keys_tmp_.get();
+    std::uint32_t* order_tmp = order_tmp_.get();
+    for (std::size_t i = 0; i < count; ++i) order[i] = static_cast<std::uint32_t>(i);
+    radix_sort(keys, order, keys_tmp, order_tmp, count);
+    loaded_ = records;
+    loaded_keys_ = keys;
+    loaded_order_ = order;
+    loaded_count_ = count;
+    loaded_pos_ = 0;
+  }
+
+  std::span<const std::byte> emit_loaded() {
+    const std::size_t n = std::min(sizes_.block_records, loaded_count_ - loaded_pos_);
+    std::byte* out = out_.get();
+    for (std::size_t i = 0; i < n; ++i) {
+      const std::size_t k = loaded_pos_ + i;
+      std::memcpy(out + i * record_bytes_, loaded_ + std::size_t{loaded_order_[k]} * record_bytes_,
+                  record_bytes_);
+      out_keys_[i] = loaded_keys_[k];
+    }
+    loaded_pos_ += n;
+    out_count_ = n;
+    return std::span<const std::byte>(out, n * record_bytes_);
+  }
+
+  std::size_t record_bytes_;
+  SortKeyFn key_;
+  unsigned key_bits_;
+  SortOptions options_;
+  Sizes sizes_;
+  SortStats stats_;
+  bool finished_ = false;
+
+  // The stage (input) or the bucket being handed out (output), with the sort arrays.
+  PageArray<std::byte> stage_;
+  PageArray<std::uint64_t> keys_;
+  PageArray<std::uint32_t> order_;
+  PageArray<std::uint64_t> keys_tmp_;
+  PageArray<std::uint32_t> order_tmp_;
+  // The part of the stage being filled: records [fill_begin_, fill_begin_ + fill_limit_),
+  // staged_ of them filled.
+  std::size_t fill_begin_ = 0;
+  std::size_t fill_limit_ = 0;
+  std::size_t staged_ = 0;
+  // The helper thread distributing the other half of the stage (threads >= 2).
+  std::thread distributor_;
+  Status distributor_status_;
+
+  // The distribution being written: a writer per bucket, opened with its first record.
+  std::vector<std::optional<RecordWriter>> writers_;
+  std::vector<TempFile> files_;
+  unsigned bits_ = 0;   // its bucket index bits
+  unsigned shift_ = 0;  // bits below them
+  std::uint32_t depth_ = 0;
+
+  std::vector<Level> levels_;  // distributions with buckets still to take, outermost first
+
+  // The sorted records being handed out: loaded_[loaded_order_[k]], k in [pos, count).
+  const std::byte* loaded_ = nullptr;
+  const std::uint64_t* loaded_keys_ = nullptr;
+  const std::uint32_t* loaded_order_ = nullptr;
+  std::size_t loaded_count_ = 0;
+  std::size_t loaded_pos_ = 0;
+  // A bucket of one key too large for memory, handed out as read.
+  std::optional<RecordReader> stream_;
+  TempFile stream_file_;
+
+  PageArray<std::byte> out_;
+  PageArray<std::uint64_t> out_keys_;
+  std::size_t out_count_ = 0;
+};
+
+}  // namespace
+
+Result<std::unique_ptr<RecordSorter>> create_bucket_sorter(std::size_t record_bytes, SortKeyFn key,
+                                                           unsigned key_bits,
+                                                           const SortOptions& options) {
+  assert(record_bytes > 0 && key && key_bits <= 64 && "create_bucket_sorter: bad arguments");
+  const std::uint64_t budget = options.memory_budget_bytes;
+  const auto too_small = [&] {
+    return usage_error("sort memory budget of " + std::to_string(budget) +
+                       " bytes is too small for " + std::to_string(record_bytes) +
+                       "-byte records");
+  };
+  // A quarter of the budget for the bucket files' buffers, the rest for the stage (the largest
+  // bucket sorted in memory) with its sort arrays and next()'s block.
+  const std::uint64_t stage_budget = budget - budget / 4;
+  BucketSorter::Sizes sizes;
+  sizes.block_records = static_cast<std::size_t>(
+      std::clamp<std::uint64_t>(budget / 16 / record_bytes, 1, kMaxBlockBytes / record_bytes + 1));
+  const std::uint64_t block_bytes = sizes.block_records * (record_bytes + sizeof(std::uint64_t));
+  if (block_bytes >= stage_budget) return too_small();
+  sizes.stage_records = static_cast<std::size_t>(std::min<std::uint64_t>(
+      (stage_budget - block_bytes) / (record_bytes + kSortBytes), std::uint64_t{1} << 31));
+  const std::size_t writer_min = std::max(kMinWriterBytes, record_bytes);
+  const std::uint64_t fan = std::min<std::uint64_t>(std::uint64_t{1} << kMaxFanBits,
+                                                    (budget - stage_budget) / writer_min);
+  if (sizes.stage_records < 2 || fan < 2) return too_small();
+  sizes.fan_bits = static_cast<unsigned>(std::bit_width(fan) - 1);
+  sizes.writer_bytes = static_cast<std::size_t>(std::min<std::uint64_t>(
+      (budget - stage_budget) >> sizes.fan_bits, kMaxWriterBytes));
+  return std::unique_ptr<RecordSorter>(
+      new BucketSorter(record_bytes, std::move(key), key_bits, options, sizes));
+}
+
+}  // namespace octolod::bake
