@@ -3,7 +3,7 @@
 // triangles/s, seconds per stage, the sorts' shape and the peak RSS (getrusage).
 //
 //   soup_bench [--triangles 1M] [--memory 64M] [--threads 2] [--shape terrain]
-//              [--attributes normal,color,uv] [--order last|triangle] [--out-of-core]
+//              [--attributes normal,color,uv] [--order any|triangle] [--out-of-core]
 //              [--work DIR] [--repeat N] [--sink]
 // --sink hands the soup to a callback (as the octree stage can) instead of writing the file.
 // The PLY is cached in the work directory as soup-bench-<shape>-<triangles>-<mask>.ply.
@@ -104,8 +104,7 @@ int main(int argc, char** argv) {
       if (!a.ok()) return fail(a.status().message());
       spec.layout = a.value();
     } else if (arg == "--order" && has_value) {
-      options.order = value == "triangle" ? bake::SoupOrder::by_triangle
-                                          : bake::SoupOrder::by_last_corner;
+      options.order = value == "triangle" ? bake::SoupOrder::by_triangle : bake::SoupOrder::any;
     } else if (arg == "--work" && has_value) {
       work = value;
     } else if (arg == "--repeat" && has_value) {
@@ -135,7 +134,7 @@ int main(int argc, char** argv) {
   std::printf("input %s (%.1f MiB), memory %.1f MiB, threads %u, order %s%s\n", ply.c_str(),
               static_cast<double>(std::filesystem::file_size(ply)) / (1 << 20),
               static_cast<double>(options.memory_budget_bytes) / (1 << 20), options.threads,
-              options.order == bake::SoupOrder::by_triangle ? "triangle" : "last corner",
+              options.order == bake::SoupOrder::by_triangle ? "triangle" : "any",
               options.force_out_of_core ? ", forced out of core" : "");
   for (int r = 0; r < repeat; ++r) {
     auto result = bake::build_soup(ply, options);
@@ -151,6 +150,10 @@ int main(int argc, char** argv) {
         static_cast<double>(s.soup.empty() ? sink_bytes : std::filesystem::file_size(s.soup.path())) /
             (1 << 20),
         s.soup.empty() ? " (sink)" : "");
+    if (!s.in_core) {
+      std::printf("  window pass: %llu far triangles left to the sorted passes\n",
+                  static_cast<unsigned long long>(s.far_triangles));
+    }
     sink_bytes = 0;
     for (const bake::SortStats& st : s.sorts) {
       std::printf(

@@ -63,12 +63,12 @@ TEST(Morton, ChildCellsNestInTheirParentAndTileIt) {
   }
 }
 
-// Records of 8 bytes holding their own index, keys given directly.
+// Records of 8 bytes holding an id (their own index unless given), keys given directly.
 struct Stream {
   std::vector<std::byte> records;
   std::vector<std::uint64_t> keys;
-  void add(std::uint64_t key) {
-    const std::uint64_t id = keys.size();
+  void add(std::uint64_t key) { add(key, keys.size()); }
+  void add(std::uint64_t key, std::uint64_t id) {
     keys.push_back(key);
     // resize + memcpy: GCC 12 -O3 misreports vector::insert of 8 bytes as -Wstringop-overflow
     const std::size_t at = records.size();
@@ -85,7 +85,7 @@ struct BuiltTree {
 BuiltTree build(const Stream& s, std::uint32_t max_tris, std::uint32_t max_depth,
                 std::size_t batch) {
   BuiltTree t;
-  OctreeBuilder builder(max_tris, max_depth, 8,
+  OctreeBuilder builder(max_tris, max_depth, 8, 0,
                         [&](std::int32_t node, std::vector<std::byte>&& records) {
                           auto& ids = t.leaves[node];
                           EXPECT_TRUE(ids.empty()) << "leaf " << node << " handed out twice";
@@ -151,6 +151,22 @@ TEST(OctreeBuilder, LeavesAtMaxDepthKeepEverything) {
   EXPECT_EQ(t.leaves.at(3), std::vector<std::uint64_t>{10});
 }
 
+// Equal keys may arrive in any order (the soup's order depends on its path): a leaf hands
+// them out by the tie value (the u32 at tie_offset 0, the id's low half), also after a split
+// replayed them.
+TEST(OctreeBuilder, EqualKeysComeOutByTheirTieValue) {
+  Stream s;
+  for (const auto& [key, id] : std::vector<std::pair<std::uint64_t, std::uint64_t>>{
+           {001, 9}, {001, 3}, {001, 5}, {002, 1}, {005, 8}, {005, 2}, {005, 7}, {005, 0}})
+    s.add(key, id);
+  for (std::size_t batch : {1u, 3u, 100u}) {
+    const BuiltTree t = build(s, 3, 2, batch);  // root and child 0 split: leaves 0/1, 0/2, 0/5
+    const std::map<std::int32_t, std::vector<std::uint64_t>> expected{
+        {2, {3, 5, 9}}, {3, {1}}, {4, {0, 2, 7, 8}}};
+    EXPECT_EQ(t.leaves, expected);
+  }
+}
+
 TEST(OctreeBuilder, SmallInputIsASingleRootLeaf) {
   Stream s;
   for (std::uint64_t k : {0u, 0777u, 0123u}) s.add(k);
@@ -170,7 +186,7 @@ TEST(OctreeBuilder, DepthZeroKeepsEverythingInTheRoot) {
 }
 
 TEST(OctreeBuilder, LeafErrorEndsTheBuild) {
-  OctreeBuilder builder(1, 1, 8, [](std::int32_t, std::vector<std::byte>&&) {
+  OctreeBuilder builder(1, 1, 8, 0, [](std::int32_t, std::vector<std::byte>&&) {
     return io_error("disk full");
   });
   Stream s;
@@ -191,7 +207,7 @@ TEST(NodeIndexer, MergesBitIdenticalCornersAndKeepsSeams) {
                                        1, 0, 0, 1, 0,  1, 1, 0, 0.5f, 1};
   const std::vector<std::uint32_t> triangles = {0, 1, 2, 2, 4, 3};
   const std::vector<std::byte> soup =
-      dereference_in_memory(vertices, triangles, layout, SoupOrder::by_triangle);
+      dereference_in_memory(vertices, triangles, layout);
   NodeIndexer indexer;
   NodeMesh mesh;
   indexer.index(soup, layout, mesh);

@@ -1,6 +1,7 @@
 // Triangle soup stage (seed 3.3, 4.2, Table 4.1): split into vertex and triangle index files,
-// three sort + dereference passes out of core, the in-core gather, and the in-memory reference
-// all give the same bytes; failures (out of space, read errors, bad options) clean up.
+// the window pass and the three sort + dereference passes out of core, the in-core gather, and
+// the in-memory reference all give the same records (the same bytes in triangle order);
+// failures (out of space, read errors, bad options) clean up.
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -57,20 +58,36 @@ std::string as_string(const std::vector<std::byte>& bytes) {
   return std::string(reinterpret_cast<const char*>(bytes.data()), bytes.size());
 }
 
-// A w x h grid of quads (2 triangles each) on a wavy surface, with every attribute. Vertex ids
-// are shuffled by a fixed permutation so the sort passes have real work to do, and one
-// degenerate triangle (a repeated vertex) is appended.
+// A soup's records in triangle order (SoupOrder::any's output compared as a set of records).
+std::string by_triangle_id(const std::string& soup, VertexLayout layout) {
+  const std::size_t rb = soup_record_bytes(layout);
+  std::vector<std::string> records;
+  for (std::size_t at = 0; at < soup.size(); at += rb) records.push_back(soup.substr(at, rb));
+  auto id = [&](const std::string& r) {
+    return load_soup_triangle_id(reinterpret_cast<const std::byte*>(r.data()), layout);
+  };
+  std::sort(records.begin(), records.end(),
+            [&](const std::string& a, const std::string& b) { return id(a) < id(b); });
+  std::string out;
+  for (const std::string& r : records) out += r;
+  return out;
+}
+
+// A w x h grid of quads (2 triangles each) on a wavy surface, with every attribute, and one
+// degenerate triangle (a repeated vertex) appended. Vertex ids are shuffled by a fixed
+// permutation (corners far apart: every triangle goes through the sorted passes) unless
+// `shuffled` is false (rows in order, as real meshes: the window pass takes them).
 struct GridMesh {
   VertexLayout layout{true, true, true};
   std::vector<float> vertices;
   std::vector<std::uint32_t> triangles;
 };
 
-GridMesh make_grid(std::uint32_t w, std::uint32_t h) {
+GridMesh make_grid(std::uint32_t w, std::uint32_t h, bool shuffled = true) {
   GridMesh m;
   const std::uint32_t n = (w + 1) * (h + 1);
   // Position of grid vertex g in the file: a multiplicative permutation of [0, n).
-  std::uint32_t mult = 7919;
+  std::uint32_t mult = shuffled ? 7919 : 1;
   while (std::gcd(mult, n) != 1) ++mult;
   const auto slot = [&](std::uint32_t g) {
     return static_cast<std::uint32_t>((std::uint64_t{g} * mult) % n);
@@ -127,7 +144,7 @@ TEST(Soup, DereferenceInMemoryFollowsTheRecordContract) {
   const std::vector<std::uint32_t> triangles = {0, 1, 2, 0, 2, 3, 1, 1, 0};
   const VertexLayout layout;
   ASSERT_EQ(soup_record_bytes(layout), 40u);
-  const auto soup = dereference_in_memory(vertices, triangles, layout, SoupOrder::by_triangle);
+  const auto soup = dereference_in_memory(vertices, triangles, layout);
   ASSERT_EQ(soup.size(), 3 * 40u);
   for (std::uint32_t t = 0; t < 3; ++t) {
     const std::byte* rec = soup.data() + t * 40;
@@ -141,13 +158,6 @@ TEST(Soup, DereferenceInMemoryFollowsTheRecordContract) {
       EXPECT_EQ(p[2], 100 * id);
     }
   }
-  // by_last_corner: corner 2 ids 2, 3, 0 -> triangles 2, 0, 1.
-  const auto by_last = dereference_in_memory(vertices, triangles, layout);
-  ASSERT_EQ(by_last.size(), soup.size());
-  EXPECT_EQ(load_soup_triangle_id(by_last.data(), layout), TriangleId{2});
-  EXPECT_EQ(load_soup_triangle_id(by_last.data() + 40, layout), TriangleId{0});
-  EXPECT_EQ(load_soup_triangle_id(by_last.data() + 80, layout), TriangleId{1});
-  EXPECT_EQ(std::memcmp(by_last.data() + 40, soup.data(), 40), 0);
 }
 
 TEST(Soup, SplitWritesVertexAndTriangleFilesInFileOrder) {
@@ -178,7 +188,8 @@ TEST(Soup, SplitWritesVertexAndTriangleFilesInFileOrder) {
 }
 
 // The seed's out-of-core passes with a tiny budget (hundreds of runs, multi-pass merges) write
-// exactly the bytes the in-core path and the in-memory dereference produce: 300K triangles.
+// exactly the bytes the in-core path and the in-memory dereference produce: 300K triangles,
+// shuffled vertex ids (nearly all far for the window pass).
 TEST(Soup, OutOfCoreWithTinyBudgetIsBitIdenticalToInCore) {
   WorkDir dir;
   const GridMesh mesh = make_grid(500, 300);
@@ -194,47 +205,99 @@ TEST(Soup, OutOfCoreWithTinyBudgetIsBitIdenticalToInCore) {
     EXPECT_EQ(a->layout, mesh.layout);
     EXPECT_TRUE(read_bytes(a->soup.path()) == expected);
 
-    auto b = build_soup(dir.file("grid.ply"), options_in(dir, kMinSoupBudget));
+    SoupOptions tiny = options_in(dir, kMinSoupBudget);
+    tiny.order = SoupOrder::by_triangle;
+    auto b = build_soup(dir.file("grid.ply"), tiny);
     ASSERT_TRUE(b.ok()) << b.status().message();
     EXPECT_FALSE(b->in_core);
     EXPECT_TRUE(read_bytes(b->soup.path()) == expected);
-    ASSERT_EQ(b->sorts.size(), 3u);
-    for (const SortStats& s : b->sorts) {
+    EXPECT_GT(b->far_triangles, 290000u);
+    ASSERT_EQ(b->sorts.size(), 4u);  // three passes, then the order sort
+    for (std::size_t i = 0; i < 4; ++i) {
+      const SortStats& s = b->sorts[i];
       EXPECT_FALSE(s.in_core);
       EXPECT_GT(s.runs, 50u);
       EXPECT_GE(s.merge_passes, 2u);
-      EXPECT_EQ(s.records, 300001u);
+      EXPECT_EQ(s.records, i < 3 ? b->far_triangles : 300001u);
     }
     EXPECT_EQ(b->bounds, a->bounds);
   }
   EXPECT_EQ(dir.work_file_count(), 0u);  // results destroyed: soups removed too
 }
 
-// Every path and order, one or two threads, budgets from the minimum up: the same bytes.
-TEST(Soup, EveryPathOrderAndThreadCountGivesTheSameBytes) {
+// Every path and order, one or two threads, budgets from the minimum up, shuffled or in-order
+// vertex ids: the same records; in triangle order the same bytes; in any order the same bytes
+// for one or two threads.
+TEST(Soup, EveryPathOrderAndThreadCountGivesTheSameRecords) {
   WorkDir dir;
-  const GridMesh mesh = make_grid(120, 80);
-  write_mesh(dir.file("grid.ply"), mesh);
-  for (const SoupOrder order : {SoupOrder::by_last_corner, SoupOrder::by_triangle}) {
+  for (const bool shuffled : {true, false}) {
+    const GridMesh mesh = make_grid(120, 80, shuffled);
+    write_mesh(dir.file("grid.ply"), mesh);
     const std::string expected =
-        as_string(dereference_in_memory(mesh.vertices, mesh.triangles, mesh.layout, order));
-    for (const std::uint64_t budget : {kMinSoupBudget, std::uint64_t{1} << 20}) {
-      for (const bool force : {false, true}) {
-        for (const unsigned threads : {1u, 2u}) {
-          SoupOptions options = options_in(dir, budget);
-          options.order = order;
-          options.force_out_of_core = force;
-          options.threads = threads;
-          auto r = build_soup(dir.file("grid.ply"), options);
-          ASSERT_TRUE(r.ok()) << r.status().message();
-          EXPECT_EQ(r->in_core, !force && budget > kMinSoupBudget);
-          EXPECT_TRUE(read_bytes(r->soup.path()) == expected)
-              << "budget " << budget << " force " << force << " threads " << threads;
-          EXPECT_GE(r->seconds.total, r->seconds.sort);
+        as_string(dereference_in_memory(mesh.vertices, mesh.triangles, mesh.layout));
+    for (const SoupOrder order : {SoupOrder::any, SoupOrder::by_triangle}) {
+      for (const std::uint64_t budget : {kMinSoupBudget, std::uint64_t{1} << 20}) {
+        for (const bool force : {false, true}) {
+          std::string one_thread;
+          for (const unsigned threads : {1u, 2u}) {
+            SoupOptions options = options_in(dir, budget);
+            options.order = order;
+            options.force_out_of_core = force;
+            options.threads = threads;
+            auto r = build_soup(dir.file("grid.ply"), options);
+            ASSERT_TRUE(r.ok()) << r.status().message();
+            EXPECT_EQ(r->in_core, !force && budget > kMinSoupBudget);
+            const std::string soup = read_bytes(r->soup.path());
+            const auto where = ::testing::Message()
+                               << "shuffled " << shuffled << " any " << (order == SoupOrder::any)
+                               << " budget " << budget << " force " << force << " threads "
+                               << threads;
+            if (order == SoupOrder::by_triangle) {
+              EXPECT_TRUE(soup == expected) << where;
+            } else {
+              EXPECT_TRUE(by_triangle_id(soup, mesh.layout) == expected) << where;
+            }
+            if (threads == 1) one_thread = soup;
+            EXPECT_TRUE(soup == one_thread) << where;
+            EXPECT_GE(r->seconds.total, r->seconds.sort);
+            // In-order rows: the window pass takes every triangle of the grid (a quad spans
+            // 122 ids); only the degenerate one appended last reaches back to vertex 0.
+            if (!r->in_core && !shuffled) {
+              EXPECT_EQ(r->far_triangles, 1u) << where;
+            }
+          }
         }
       }
     }
   }
+}
+
+// A mesh whose rows are in order but with triangles reaching across the whole vertex file (as
+// a mesh stitched from parts): the window pass takes the rows, the far ones take the three
+// passes (with the degenerate triangle appended after the grid, which reaches back to vertex
+// 0), the soup is the in-memory one.
+TEST(Soup, WindowPassAndSortedPassesShareTheTriangles) {
+  WorkDir dir;
+  GridMesh mesh = make_grid(300, 100, false);
+  const std::uint32_t n = 301 * 101;
+  for (std::uint32_t k = 0; k < 500; ++k)
+    mesh.triangles.insert(mesh.triangles.end(), {k * 50, n - 1 - k * 7, n / 2 + k});
+  write_mesh(dir.file("grid.ply"), mesh);
+  const std::string expected =
+      as_string(dereference_in_memory(mesh.vertices, mesh.triangles, mesh.layout));
+  for (const SoupOrder order : {SoupOrder::any, SoupOrder::by_triangle}) {
+    SoupOptions options = options_in(dir, 1u << 20);
+    options.force_out_of_core = true;
+    options.order = order;
+    auto r = build_soup(dir.file("grid.ply"), options);
+    ASSERT_TRUE(r.ok()) << r.status().message();
+    EXPECT_EQ(r->far_triangles, 501u);
+    ASSERT_GE(r->sorts.size(), 3u);
+    EXPECT_EQ(r->sorts[0].records, 501u);
+    const std::string soup = read_bytes(r->soup.path());
+    EXPECT_TRUE((order == SoupOrder::any ? by_triangle_id(soup, mesh.layout) : soup) == expected);
+  }
+  EXPECT_EQ(dir.work_file_count(), 0u);
 }
 
 TEST(Soup, SinkReceivesTheSoupInsteadOfAFile) {
@@ -271,7 +334,7 @@ TEST(Soup, SinkReceivesTheSoupInsteadOfAFile) {
     ASSERT_TRUE(r.ok()) << r.status().message();
     EXPECT_EQ(starts, 1);
     EXPECT_TRUE(r->soup.empty());
-    EXPECT_TRUE(received == expected);
+    EXPECT_TRUE(by_triangle_id(received, mesh.layout) == expected);
     EXPECT_EQ(dir.work_file_count(), 0u);
     // A sink_start's error ends the stage before any record, and cleans up.
     options.sink_start = [](const SoupSinkStart&) { return bad_input_error("no room"); };
@@ -356,6 +419,7 @@ TEST(Soup, FacesBeforeVerticesGiveTheSameSoup) {
   for (const bool force : {false, true}) {
     SoupOptions options = options_in(dir, 1u << 20);
     options.force_out_of_core = force;
+    options.order = SoupOrder::by_triangle;
     // The quad fans out into more triangles than the 3 faces declared: a mesh sink is never
     // handed a truncated mesh, the stage reads the PLY again for the records path.
     options.mesh_sink.accepts = [](VertexLayout, std::uint64_t, std::uint64_t) { return true; };
@@ -389,7 +453,7 @@ TEST(Soup, EmptyMeshGivesAnEmptySoup) {
 
 TEST(Soup, ProgressReportsEveryStage) {
   WorkDir dir;
-  const GridMesh mesh = make_grid(30, 30);
+  const GridMesh mesh = make_grid(100, 60);  // more vertices than the window: far triangles
   write_mesh(dir.file("grid.ply"), mesh);
   std::set<std::string> stages;
   SoupOptions options = options_in(dir, 1u << 20);
@@ -404,8 +468,8 @@ TEST(Soup, ProgressReportsEveryStage) {
   };
   auto r = build_soup(dir.file("grid.ply"), options);
   ASSERT_TRUE(r.ok()) << r.status().message();
-  EXPECT_EQ(stages, (std::set<std::string>{"split", "dereference 0", "dereference 1",
-                                           "dereference 2", "order"}));
+  EXPECT_EQ(stages, (std::set<std::string>{"split", "dereference", "dereference 0",
+                                           "dereference 1", "dereference 2", "order"}));
   EXPECT_EQ(last_done, r->triangle_count);
   EXPECT_EQ(last_total, r->triangle_count);
 }

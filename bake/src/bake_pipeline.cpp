@@ -14,6 +14,7 @@
 #include <utility>
 #include <vector>
 
+#include "bucket_sort.h"
 #include "morton.h"
 #include "octolod/bake/external_sort.h"
 #include "octolod/bake/soup.h"
@@ -150,7 +151,9 @@ class OctreeInput {
     sort_options.memory_budget_bytes = budget;
     sort_options.work_dir = work_;
     sort_options.threads = threads_;
-    return RecordSorter::create(soup_record_bytes(layout_), key_, sort_options);
+    // Morton keys have 3 bits per level: a bucket (MSD radix) sort, no merge.
+    return create_bucket_sorter(soup_record_bytes(layout_), key_, 3 * options_.max_depth,
+                                sort_options);
   }
 
   Status read_back(const std::function<void(std::uint64_t)>& progress) {
@@ -260,6 +263,7 @@ Result<OctreeResult> build_octree(const BakeOptions& options, const SoupResult& 
       lod_tree_options(options, soup.layout, result.cube, root, workers, budget));
   OctreeBuilder* builder_ptr = nullptr;
   OctreeBuilder builder(options.max_tris, options.max_depth, record_bytes,
+                        soup_triangle_id_offset(soup.layout),
                         [&](std::int32_t node, std::vector<std::byte>&& records) {
                           if (cleanup_signal_received()) return interrupted();
                           return lod_tree.add_leaf(node, builder_ptr->nodes(), std::move(records));
@@ -295,9 +299,7 @@ Result<OctreeResult> build_octree(const BakeOptions& options, const SoupResult& 
 // triangle's centroid key is computed from the vertex array, the (key, triangle id) pairs are
 // sorted in memory, the tree is decided from the keys alone, and each leaf's soup records are
 // gathered straight from the mesh: no soup records are produced or sorted externally. The
-// leaves are the records path's: the soup (SoupOrder::by_last_corner) comes in (corner 2's
-// vertex id, triangle id) order and the octree sort is stable, so a leaf holds its triangles
-// by (key, corner 2's vertex id, triangle id), as here.
+// leaves are the records path's: by (key, triangle id) (OctreeBuilder's leaf order).
 
 // Keys handed to the OctreeBuilder per push (and progress granularity).
 constexpr std::size_t kMeshKeyBlock = 1 << 14;
@@ -344,7 +346,7 @@ MeshOrder sort_mesh_triangles(const BakeOptions& options, unsigned threads, cons
     compute(0, n);
   }
   {
-    // By key: the ids start in triangle order and the sort is stable.
+    // By key, then triangle id: the ids start in triangle order and the sort is stable.
     MeshOrder scratch{PageArray<std::uint64_t>(n), PageArray<std::uint32_t>(n)};
     std::uint64_t* keys = sorted.keys.get();
     std::uint32_t* ids = sorted.ids.get();
@@ -352,17 +354,6 @@ MeshOrder sort_mesh_triangles(const BakeOptions& options, unsigned threads, cons
     std::uint32_t* ids_tmp = scratch.ids.get();
     radix_sort(keys, ids, keys_tmp, ids_tmp, n);
     if (keys != sorted.keys.get()) std::swap(sorted, scratch);  // keep the result, free the rest
-  }
-  // Equal keys: by corner 2's vertex id, then triangle id (already so).
-  auto corner2 = [&](std::uint32_t t) { return mesh.triangles[3 * std::size_t{t} + 2]; };
-  for (std::size_t i = 0; i < n;) {
-    std::size_t j = i + 1;
-    while (j < n && sorted.keys[j] == sorted.keys[i]) ++j;
-    if (j - i > 1) {
-      std::stable_sort(sorted.ids.get() + i, sorted.ids.get() + j,
-                       [&](std::uint32_t a, std::uint32_t b) { return corner2(a) < corner2(b); });
-    }
-    i = j;
   }
   return sorted;
 }
@@ -392,7 +383,7 @@ Result<OctreeResult> build_octree_from_mesh(const BakeOptions& options, unsigned
   std::size_t next_leaf = 0;  // first entry of `sorted` in the next leaf
   OctreeBuilder* builder_ptr = nullptr;
   OctreeBuilder builder(
-      options.max_tris, options.max_depth, 0,
+      options.max_tris, options.max_depth, 0, 0,
       [&](std::int32_t node, std::vector<std::byte>&&) -> Status {
         if (cleanup_signal_received()) return interrupted();
         const auto& nodes = builder_ptr->nodes();
@@ -508,7 +499,7 @@ Result<BakeReport> run_bake(const BakeOptions& options) {
     soup_options.memory_budget_bytes = options.memory_budget_bytes;
     soup_options.work_dir = work->path();
     soup_options.threads = threads;
-    soup_options.order = SoupOrder::by_last_corner;
+    soup_options.order = SoupOrder::any;
     soup_options.force_out_of_core = options.force_out_of_core;
     soup_options.progress = options.progress;
     OctreeInput octree_input(options, work->path(), threads);
@@ -559,6 +550,7 @@ Result<BakeReport> run_bake(const BakeOptions& options) {
     manifest.stats["octree_in_memory"] = soup->mesh_consumed ? 1 : 0;
     report.sort_runs = octree->sort.runs;
     manifest.stats["soup_in_core"] = soup->in_core ? 1 : 0;
+    manifest.stats["soup_far_triangles"] = static_cast<double>(soup->far_triangles);
     manifest.stats["octree_sort_runs"] = static_cast<double>(octree->sort.runs);
     manifest.stats["octree_sort_merge_passes"] = octree->sort.merge_passes;
     manifest.stats["soup_streamed_to_sort"] = octree->soup_streamed ? 1 : 0;

@@ -5,8 +5,10 @@
 #include <algorithm>
 #include <cassert>
 #include <cstring>
-#include <numeric>
 #include <string>
+#include <vector>
+
+#include "page_array.h"
 
 namespace octolod::bake {
 namespace {
@@ -17,19 +19,101 @@ std::uint32_t load_u32(const std::byte* p) {
   return v;
 }
 
+Status missing_vertex(const RecordReader& vertices, std::uint64_t id) {
+  return io_error("vertex file '" + vertices.path().string() + "' has " +
+                  std::to_string(vertices.record_count()) + " vertices, vertex " +
+                  std::to_string(id) + " is missing");
+}
+
 }  // namespace
 
-SortKeyFn last_corner_key(VertexLayout layout, int filled) {
-  const std::size_t rb = working_record_bytes(layout, filled);
-  const std::size_t id_offset = working_vertex_id_offset(layout, filled) + 4 * (2 - filled);
-  const std::size_t tri_offset = rb - 4;
-  return [rb, id_offset, tri_offset](std::span<const std::byte> records,
-                                     std::span<std::uint64_t> keys) {
-    const std::byte* p = records.data();
-    for (std::size_t i = 0; i < keys.size(); ++i, p += rb) {
-      keys[i] = (std::uint64_t{load_u32(p + id_offset)} << 32) | load_u32(p + tri_offset);
+Result<WindowStats> dereference_window(
+    VertexLayout layout, std::size_t window_vertices, RecordReader& triangles,
+    RecordReader& vertices, RecordOutput& out,
+    const std::function<Status(std::span<const TriangleRecord>)>& far) {
+  assert(window_vertices > 0 && (window_vertices & (window_vertices - 1)) == 0 &&
+         "dereference_window: the window holds a power of two of vertices");
+  const std::size_t vertex_bytes = layout.bytes();
+  const std::size_t out_bytes = soup_record_bytes(layout);
+  const std::uint64_t mask = window_vertices - 1;
+  // Vertex v sits in slot v & mask while v is in [end - window_vertices, end).
+  const PageArray<std::byte> window(window_vertices * vertex_bytes);
+  std::uint64_t end = 0;
+  // A read ahead of what a triangle needs, so the window is not refilled vertex by vertex.
+  const std::size_t read_ahead = std::max<std::size_t>(1, window_vertices / 8);
+  // Far triangles, batched.
+  std::vector<TriangleRecord> far_batch;
+  far_batch.reserve(std::max<std::size_t>(1, (std::size_t{64} << 10) / sizeof(TriangleRecord)));
+  WindowStats stats;
+
+  // Reads until vertex `last` is in the window, keeping vertex `keep` (last - keep <
+  // window_vertices) in it.
+  auto fill_to = [&](std::uint64_t keep, std::uint64_t last) -> Status {
+    while (end <= last) {
+      const std::uint64_t want = std::max<std::uint64_t>(last + 1 - end, read_ahead);
+      auto block = vertices.read(std::min<std::uint64_t>(want, keep + window_vertices - end));
+      if (!block.ok()) return block.status();
+      if (block->empty()) return missing_vertex(vertices, last);
+      const std::byte* src = block->data();
+      for (std::size_t n = block->size() / vertex_bytes; n > 0;) {
+        const std::size_t slot = static_cast<std::size_t>(end & mask);
+        const std::size_t run = std::min<std::size_t>(n, window_vertices - slot);
+        std::memcpy(window.get() + slot * vertex_bytes, src, run * vertex_bytes);
+        src += run * vertex_bytes;
+        end += run;
+        n -= run;
+      }
     }
+    return {};
   };
+
+  for (;;) {
+    auto block = triangles.read();
+    if (!block.ok()) return block.status();
+    if (block->empty()) break;
+    const std::byte* rec = block->data();
+    std::size_t left = block->size() / sizeof(TriangleRecord);
+    while (left > 0) {
+      auto space = out.reserve(left);
+      if (!space.ok()) return space.status();
+      const std::size_t n = space->size() / out_bytes;
+      std::byte* dst = space->data();
+      std::size_t written = 0;
+      for (std::size_t i = 0; i < n; ++i, rec += sizeof(TriangleRecord)) {
+        TriangleRecord t;
+        std::memcpy(&t, rec, sizeof t);
+        std::uint32_t ids[3];
+        for (int c = 0; c < 3; ++c) ids[c] = static_cast<std::uint32_t>(t.corner[c]);
+        const std::uint64_t lo = std::min({ids[0], ids[1], ids[2]});
+        const std::uint64_t hi = std::max({ids[0], ids[1], ids[2]});
+        const std::uint64_t first = end > window_vertices ? end - window_vertices : 0;
+        if (hi - lo >= window_vertices || lo < first) {
+          far_batch.push_back(t);
+          if (far_batch.size() == far_batch.capacity()) {
+            OCTOLOD_RETURN_IF_ERROR(far(far_batch));
+            stats.far += far_batch.size();
+            far_batch.clear();
+          }
+          continue;
+        }
+        OCTOLOD_RETURN_IF_ERROR(fill_to(lo, hi));
+        std::uint32_t slots[3];
+        for (int c = 0; c < 3; ++c) slots[c] = static_cast<std::uint32_t>(ids[c] & mask);
+        store_soup_record(dst + written * out_bytes, layout,
+                          reinterpret_cast<const float*>(window.get()), slots,
+                          static_cast<std::uint32_t>(t.triangle));
+        ++written;
+      }
+      OCTOLOD_RETURN_IF_ERROR(out.commit(written));
+      stats.near += written;
+      left -= n;
+    }
+  }
+  if (!far_batch.empty()) {
+    OCTOLOD_RETURN_IF_ERROR(far(far_batch));
+    stats.far += far_batch.size();
+  }
+  return stats;
 }
 
 Status dereference_pass(int corner, VertexLayout layout, RecordSorter& sorted,
@@ -62,11 +146,7 @@ Status dereference_pass(int corner, VertexLayout layout, RecordSorter& sorted,
         while (id >= block_end) {
           auto next = vertices.read();
           if (!next.ok()) return next.status();
-          if (next->empty()) {
-            return io_error("vertex file '" + vertices.path().string() + "' has " +
-                            std::to_string(vertices.record_count()) + " vertices, vertex " +
-                            std::to_string(id) + " is missing");
-          }
+          if (next->empty()) return missing_vertex(vertices, id);
           block = next->data();
           block_first = block_end;
           block_end += next->size() / vertex_bytes;
@@ -110,25 +190,17 @@ Status dereference_in_core(VertexLayout layout, std::span<const float> vertices,
 
 std::vector<std::byte> dereference_in_memory(std::span<const float> vertices,
                                              std::span<const std::uint32_t> triangles,
-                                             VertexLayout layout, SoupOrder order) {
+                                             VertexLayout layout) {
   const std::size_t out_bytes = soup_record_bytes(layout);
   const std::size_t count = triangles.size() / 3;
-  // Output order: triangle ids, stably sorted by corner 2's id for by_last_corner.
-  std::vector<std::uint32_t> order_ids(count);
-  std::iota(order_ids.begin(), order_ids.end(), 0u);
-  if (order == SoupOrder::by_last_corner) {
-    std::stable_sort(order_ids.begin(), order_ids.end(), [&](std::uint32_t a, std::uint32_t b) {
-      return triangles[3 * std::size_t{a} + 2] < triangles[3 * std::size_t{b} + 2];
-    });
-  }
   std::vector<std::byte> soup(count * out_bytes);
-  for (std::size_t i = 0; i < count; ++i) {
-    const std::uint32_t t = order_ids[i];
-    const std::uint32_t* corners = triangles.data() + 3 * std::size_t{t};
+  for (std::size_t t = 0; t < count; ++t) {
+    const std::uint32_t* corners = triangles.data() + 3 * t;
     for (std::size_t c = 0; c < 3; ++c)
       assert(std::size_t{corners[c]} * layout.floats() < vertices.size() &&
              "dereference_in_memory: vertex id out of range");
-    store_soup_record(soup.data() + i * out_bytes, layout, vertices.data(), corners, t);
+    store_soup_record(soup.data() + t * out_bytes, layout, vertices.data(), corners,
+                      static_cast<std::uint32_t>(t));
   }
   return soup;
 }

@@ -1,4 +1,13 @@
-// Pointer dereferencing (seed 3.3, 4.2.2, Table 4.1). A working record entering pass c
+// Pointer dereferencing (seed 3.3, 4.2.2, Table 4.1), out of core in two steps:
+//
+// 1. The window pass (octolod's, not the seed's): a mesh's triangles nearly always reference
+//    vertices close together in the file, and sweep the vertex ids in file order (a generated
+//    or scanned mesh is written row by row, strip by strip). The triangle file and the vertex
+//    file are read front to back together, the vertices into a window of consecutive ids; a
+//    triangle whose corners are all in the window becomes a soup record at once. The others
+//    ("far": corners further apart than the window, or one already slid out of it) go on to
+//    step 2. One read of each file instead of three external sorts.
+// 2. The seed's three passes for the far triangles. A working record entering pass c
 // (c = 0, 1, 2) holds the corners already dereferenced, the vertex ids still to go, and the
 // triangle id:
 //   [corner 0 .. corner c-1: layout.floats() floats each][vertex id c .. 2: u32 each][triangle id]
@@ -8,6 +17,7 @@
 #pragma once
 
 #include <cstddef>
+#include <functional>
 #include <span>
 
 #include "octolod/bake/external_sort.h"
@@ -28,11 +38,6 @@ constexpr std::size_t working_vertex_id_offset(VertexLayout layout, int corner) 
   return static_cast<std::size_t>(corner) * layout.bytes();
 }
 
-// Sort key of SoupOrder::by_last_corner for working records with two corners filled:
-// (vertex id of corner 2 << 32) | triangle id. (Input already in triangle order, as in the
-// in-core path, needs only corner 2's id: the sort is stable.)
-SortKeyFn last_corner_key(VertexLayout layout, int filled);
-
 // Where a dereference writes its records: reserve() room for between 1 and `max_records`
 // records, fill a prefix, commit() it. Implemented over a RecordSorter (the next pass's sort,
 // zero-copy), a RecordWriter (the soup file) or a caller's sink.
@@ -42,6 +47,23 @@ class RecordOutput {
   virtual Result<std::span<std::byte>> reserve(std::size_t max_records) = 0;
   virtual Status commit(std::size_t records) = 0;
 };
+
+struct WindowStats {
+  std::uint64_t near = 0;  // triangles written to `out`
+  std::uint64_t far = 0;   // triangles handed to `far`
+};
+
+// The window pass: `triangles` (TriangleRecords, any order) read to the end; `vertices` (the
+// vertex file, layout.bytes() records) positioned at its start; a window of `window_vertices`
+// vertices (a power of two, window_vertices * layout.bytes() bytes of memory). The window only
+// slides forward: it covers the largest id of each near triangle as it comes. Near triangles
+// go to `out` as soup records in triangle-file order, far ones to `far` (batches of whole
+// TriangleRecords, valid during the call only). io error if the vertex file is shorter than an
+// id needs.
+Result<WindowStats> dereference_window(
+    VertexLayout layout, std::size_t window_vertices, RecordReader& triangles,
+    RecordReader& vertices, RecordOutput& out,
+    const std::function<Status(std::span<const TriangleRecord>)>& far);
 
 // Out-of-core pass `corner`: `sorted` yields working records with `corner` corners filled, in
 // ascending order of vertex id `corner`; `vertices` is the vertex file (layout.bytes() records)

@@ -3,6 +3,7 @@
 #include "octree_build.h"
 
 #include <cassert>
+#include <cstring>
 #include <utility>
 
 #include "morton.h"
@@ -19,13 +20,15 @@ std::string OctreeNode::path() const {
 }
 
 OctreeBuilder::OctreeBuilder(std::uint32_t max_tris, std::uint32_t max_depth,
-                             std::size_t record_bytes, LeafFn on_leaf)
+                             std::size_t record_bytes, std::size_t tie_offset, LeafFn on_leaf)
     : max_tris_(max_tris),
       max_depth_(max_depth),
       record_bytes_(record_bytes),
+      tie_offset_(tie_offset),
       on_leaf_(std::move(on_leaf)) {
   assert(max_depth <= kMaxOctreeDepth && "max_depth above kMaxOctreeDepth: keys would overflow");
   assert(max_tris >= 1 && "max_tris must be at least 1");
+  assert((record_bytes == 0 || tie_offset + 4 <= record_bytes) && "tie_offset outside the record");
 }
 
 Status OctreeBuilder::push(std::span<const std::byte> records,
@@ -85,7 +88,31 @@ Status OctreeBuilder::split_candidate() {
   return push(records, keys);
 }
 
+// Insertion sort of each run of equal keys by the tie value: the runs are short (triangles of
+// one finest cell) and usually in order already, which costs one comparison per record.
+void OctreeBuilder::order_equal_keys() {
+  const std::size_t rb = record_bytes_;
+  std::byte* records = buffer_.data();
+  auto tie = [&](std::size_t i) {
+    std::uint32_t v;
+    std::memcpy(&v, records + i * rb + tie_offset_, sizeof v);
+    return v;
+  };
+  std::vector<std::byte> moving(rb);
+  for (std::size_t i = 1; i < buffer_keys_.size(); ++i) {
+    const std::uint64_t key = buffer_keys_[i];
+    const std::uint32_t t = tie(i);
+    if (buffer_keys_[i - 1] != key || tie(i - 1) <= t) continue;
+    std::memcpy(moving.data(), records + i * rb, rb);
+    std::size_t j = i;
+    for (; j > 0 && buffer_keys_[j - 1] == key && tie(j - 1) > t; --j)
+      std::memcpy(records + j * rb, records + (j - 1) * rb, rb);
+    std::memcpy(records + j * rb, moving.data(), rb);
+  }
+}
+
 Status OctreeBuilder::close_candidate() {
+  if (record_bytes_ > 0) order_equal_keys();
   OctreeNode& c = nodes_[static_cast<std::size_t>(candidate_)];
   c.leaf = true;
   c.triangles = buffer_keys_.size();

@@ -40,7 +40,7 @@ struct OctreeNode {
   std::string path() const;
 };
 
-// Receives a finished leaf: its node index and its records in sorted order (ownership passes).
+// Receives a finished leaf: its node index and its records in leaf order (ownership passes).
 using LeafFn = std::function<Status(std::int32_t node, std::vector<std::byte>&& records)>;
 
 class OctreeBuilder {
@@ -49,9 +49,11 @@ class OctreeBuilder {
   // levels. on_leaf is called from push()/finish(), in key order; an error it returns ends the
   // build with that error. record_bytes 0 decides the tree from the keys alone: leaves get no
   // records, and a leaf's triangles are the next OctreeNode::triangles keys of the stream.
-  // The tree (nodes(), leaves and their order) depends on the keys only.
+  // The tree (nodes(), leaves and their order) depends on the keys only. Leaf order: by key,
+  // equal keys by the u32 at byte `tie_offset` of the record (the triangle id), so a leaf's
+  // records do not depend on the order equal keys arrived in.
   OctreeBuilder(std::uint32_t max_tris, std::uint32_t max_depth, std::size_t record_bytes,
-                LeafFn on_leaf);
+                std::size_t tie_offset, LeafFn on_leaf);
 
   // The next records of the sorted stream and their keys (keys.size() records, non-decreasing
   // keys across all calls).
@@ -67,6 +69,7 @@ class OctreeBuilder {
   Status add(const std::byte* record, std::uint64_t key);
   Status split_candidate();
   Status close_candidate();
+  void order_equal_keys();
   std::uint64_t prefix_of(std::uint64_t key, std::uint32_t depth) const {
     return key >> (3 * (max_depth_ - depth));
   }
@@ -74,6 +77,7 @@ class OctreeBuilder {
   std::uint32_t max_tris_;
   std::uint32_t max_depth_;
   std::size_t record_bytes_;
+  std::size_t tie_offset_;
   LeafFn on_leaf_;
   std::vector<OctreeNode> nodes_;
   std::vector<std::int32_t> open_;  // split nodes on the current key's path, root first

@@ -4,6 +4,7 @@
 #include "octolod/bake/soup.h"
 
 #include <algorithm>
+#include <bit>
 #include <cstddef>
 #include <chrono>
 #include <cstring>
@@ -76,6 +77,7 @@ class SoupOutput final : public RecordOutput {
       writer_->commit(records);
       return {};
     }
+    if (records == 0) return {};
     return (*sink_)(std::span<const std::byte>(batch_.get(), records * record_bytes_));
   }
   Status finish() { return writer_ ? writer_->finish() : Status{}; }
@@ -255,13 +257,10 @@ class SoupBuilder {
     // half the budget, so the sort gets at least 1/4 of it minus the reader's file buffer.
     const std::uint64_t sort_budget =
         options_.memory_budget_bytes - vertex_array_bytes - 2 * io_ - kPlyFileBuffer;
+    // Triangle order for either SoupOrder (the split's order, unless polygons fanned out).
     auto sorter = RecordSorter::create(
         sizeof(TriangleRecord),
-        options_.order == SoupOrder::by_last_corner
-            // The input is in triangle order already: a stable sort by corner 2 is enough.
-            ? sort_key_u32_at(offsetof(TriangleRecord, corner) + 2 * sizeof(VertexId),
-                              sizeof(TriangleRecord))
-            : sort_key_u32_at(offsetof(TriangleRecord, triangle), sizeof(TriangleRecord)),
+        sort_key_u32_at(offsetof(TriangleRecord, triangle), sizeof(TriangleRecord)),
         sort_options(sort_budget));
     if (!sorter.ok()) return sorter.status();
     RecordSorter& triangles = *sorter.value();
@@ -291,72 +290,125 @@ class SoupBuilder {
     return {};
   }
 
-  // The seed's three passes, each sorted stream feeding the next pass's sort.
+  // Out of core: the split writes the vertex file and the triangle file; the window pass
+  // (dereference.h) dereferences the triangles whose corners lie close together in the vertex
+  // file, the seed's three sorted passes the rest.
   Status run_out_of_core() {
-    // Budget: two sorts live at once (one merging, one forming runs) plus two io buffers (the
-    // vertex file reader and the output batch); the split's PLY reader, vertex writer and
-    // triangle batch fit in the half the second sort does not use yet (kMinSoupBudget).
-    const std::uint64_t sort_budget = (options_.memory_budget_bytes - 2 * io_) / 2;
+    // Budget: the window pass holds the window and the far triangles' sort (forming runs); the
+    // three passes two sorts (one merging, one forming runs); either with three io buffers
+    // (two readers, the output batch). The window and each sort get a quarter of what four io
+    // buffers leave; the other half is the soup's consumer's (SoupOptions::sink_start), or the
+    // order sort's for SoupOrder::by_triangle. The split (PLY reader, two file writers and a
+    // triangle batch) needs less than the window pass.
+    const std::uint64_t quarter = (options_.memory_budget_bytes - 4 * io_) / 4;
     TempFile vertex_file = make_temp_file(options_.work_dir, "vertices");
-    auto sorter = RecordSorter::create(
-        sizeof(TriangleRecord), sort_key_u32_at(working_vertex_id_offset(layout_, 0), 16),
-        sort_options(sort_budget));
-    if (!sorter.ok()) return sorter.status();
-    std::unique_ptr<RecordSorter> current = std::move(sorter).value();
+    TempFile triangle_file = make_temp_file(options_.work_dir, "triangles");
     {
       auto vertex_writer = RecordWriter::create(vertex_file.path(), layout_.bytes(), io_);
       if (!vertex_writer.ok()) return vertex_writer.status();
+      auto triangle_writer = RecordWriter::create(triangle_file.path(), sizeof(TriangleRecord), io_);
+      if (!triangle_writer.ok()) return triangle_writer.status();
       SplitSinks sinks;
       sinks.vertices = [&](std::uint64_t, std::span<const float> v) {
         return vertex_writer->append(reinterpret_cast<const std::byte*>(v.data()),
                                      v.size() / layout_.floats());
       };
       sinks.triangles = [&](std::span<const TriangleRecord> t) {
-        return current->push(std::as_bytes(t));
+        return triangle_writer->append(reinterpret_cast<const std::byte*>(t.data()), t.size());
       };
-      OCTOLOD_RETURN_IF_ERROR(split(std::move(sinks), current.get()));
+      OCTOLOD_RETURN_IF_ERROR(split(std::move(sinks), nullptr));
       OCTOLOD_RETURN_IF_ERROR(vertex_writer->finish());
+      OCTOLOD_RETURN_IF_ERROR(triangle_writer->finish());
     }
-    OCTOLOD_RETURN_IF_ERROR(current->finish());
 
-    // The soup's output exists only once the second sort is gone: in the last pass, or for
-    // the by-triangle sort's output.
+    // Where the soup records go: the soup output, or the order sort in front of it.
     std::unique_ptr<SoupOutput> soup;
+    std::unique_ptr<RecordSorter> order;
+    std::unique_ptr<RecordOutput> order_input;
+    if (options_.order == SoupOrder::by_triangle) {
+      auto created = RecordSorter::create(
+          soup_record_bytes(layout_),
+          sort_key_u32_at(soup_triangle_id_offset(layout_), soup_record_bytes(layout_)),
+          sort_options(quarter));
+      if (!created.ok()) return created.status();
+      order = std::move(created).value();
+      order_input = std::make_unique<SorterOutput>(*order);
+    } else {
+      // In use: the window, the far triangles' sort, three io buffers.
+      auto opened = open_output(false, 2 * quarter + 3 * io_);
+      if (!opened.ok()) return opened.status();
+      soup = std::move(opened).value();
+    }
+    RecordOutput& records = order ? *order_input : static_cast<RecordOutput&>(*soup);
+
+    // The window pass; the far triangles sorted by corner 0's vertex id meanwhile.
+    std::unique_ptr<RecordSorter> far;
+    {
+      auto triangles = RecordReader::open(triangle_file.path(), sizeof(TriangleRecord), io_);
+      if (!triangles.ok()) return triangles.status();
+      auto vertices = RecordReader::open(vertex_file.path(), layout_.bytes(), io_);
+      if (!vertices.ok()) return vertices.status();
+      ProgressOutput out(records, [this](std::uint64_t done) {
+        progress("dereference", done, result_.triangle_count);
+      });
+      auto window = dereference_window(
+          layout_, std::bit_floor(std::max<std::uint64_t>(quarter / layout_.bytes(), 1)),
+          triangles.value(), vertices.value(), out,
+          [&](std::span<const TriangleRecord> t) -> Status {
+            if (!far) {
+              auto created = RecordSorter::create(
+                  sizeof(TriangleRecord), sort_key_u32_at(working_vertex_id_offset(layout_, 0), 16),
+                  sort_options(quarter));
+              if (!created.ok()) return created.status();
+              far = std::move(created).value();
+            }
+            return far->push(std::as_bytes(t));
+          });
+      if (!window.ok()) return window.status();
+      result_.far_triangles = window->far;
+    }
+    triangle_file.remove();
+    if (far) {
+      OCTOLOD_RETURN_IF_ERROR(far->finish());
+      OCTOLOD_RETURN_IF_ERROR(run_passes(std::move(far), quarter, vertex_file.path(), records));
+    }
+    vertex_file.remove();
+    if (order) {
+      OCTOLOD_RETURN_IF_ERROR(order->finish());
+      // In use: the merging order sort, the output batch.
+      auto opened = open_output(false, quarter + io_);
+      if (!opened.ok()) return opened.status();
+      soup = std::move(opened).value();
+      OCTOLOD_RETURN_IF_ERROR(drain_order(*order, *soup));
+    }
+    return soup->finish();
+  }
+
+  // The seed's three passes over `current` (finished, sorted by corner 0's vertex id), each
+  // sorted stream feeding the next pass's sort; the last pass's records go to `last`.
+  Status run_passes(std::unique_ptr<RecordSorter> current, std::uint64_t sort_budget,
+                    const std::filesystem::path& vertex_file, RecordOutput& last) {
+    const std::uint64_t total = current->stats().records;
     static constexpr const char* kPassNames[3] = {"dereference 0", "dereference 1",
                                                   "dereference 2"};
     for (int corner = 0; corner < 3; ++corner) {
       const int filled = corner + 1;
-      // Where this pass's output goes: the next pass's sort, the final order sort, or the soup.
-      const std::size_t out_bytes = working_record_bytes(layout_, filled);
-      SortKeyFn key;
-      if (filled < 2) {
-        key = sort_key_u32_at(working_vertex_id_offset(layout_, filled), out_bytes);
-      } else if (filled == 2) {
-        key = options_.order == SoupOrder::by_last_corner
-                  ? last_corner_key(layout_, 2)
-                  : sort_key_u32_at(working_vertex_id_offset(layout_, 2), out_bytes);
-      } else if (options_.order == SoupOrder::by_triangle) {
-        key = sort_key_u32_at(soup_triangle_id_offset(layout_), out_bytes);
-      }
       std::unique_ptr<RecordSorter> next;
       std::unique_ptr<RecordOutput> sorter_output;
-      if (key) {
-        auto created = RecordSorter::create(out_bytes, std::move(key), sort_options(sort_budget));
+      if (filled < 3) {
+        const std::size_t out_bytes = working_record_bytes(layout_, filled);
+        auto created = RecordSorter::create(
+            out_bytes, sort_key_u32_at(working_vertex_id_offset(layout_, filled), out_bytes),
+            sort_options(sort_budget));
         if (!created.ok()) return created.status();
         next = std::move(created).value();
         sorter_output = std::make_unique<SorterOutput>(*next);
-      } else {
-        // In use: the merging sort, the vertex file reader, the output batch.
-        auto opened = open_output(false, sort_budget + 2 * io_);
-        if (!opened.ok()) return opened.status();
-        soup = std::move(opened).value();
       }
       const char* stage = kPassNames[corner];
-      ProgressOutput out(next ? *sorter_output : static_cast<RecordOutput&>(*soup),
-                         [this, stage](std::uint64_t done) {
-                           progress(stage, done, result_.triangle_count);
-                         });
-      auto vertices = RecordReader::open(vertex_file.path(), layout_.bytes(), io_);
+      ProgressOutput out(next ? *sorter_output : last, [this, stage, total](std::uint64_t done) {
+        progress(stage, done, total);
+      });
+      auto vertices = RecordReader::open(vertex_file, layout_.bytes(), io_);
       if (!vertices.ok()) return vertices.status();
       OCTOLOD_RETURN_IF_ERROR(dereference_pass(corner, layout_, *current, vertices.value(), out));
       result_.sorts.push_back(current->stats());
@@ -365,35 +417,34 @@ class SoupBuilder {
       OCTOLOD_RETURN_IF_ERROR(next->finish());
       current = std::move(next);
     }
-    vertex_file.remove();
-    if (current) {  // SoupOrder::by_triangle: the soup sorted by triangle id
-      auto opened = open_output(false, sort_budget + io_);  // the merging sort, the batch
-      if (!opened.ok()) return opened.status();
-      soup = std::move(opened).value();
-      const std::size_t record_bytes = soup_record_bytes(layout_);
-      std::uint64_t done = 0;
-      for (;;) {
-        auto block = current->next();
-        if (!block.ok()) return block.status();
-        if (block->empty()) break;
-        // Through reserve/commit, so a sink sees batches of at most its batch size.
-        const std::byte* src = block->data();
-        std::size_t left = block->size() / record_bytes;
-        while (left > 0) {
-          auto space = soup->reserve(left);
-          if (!space.ok()) return space.status();
-          std::memcpy(space->data(), src, space->size());
-          const std::size_t n = space->size() / record_bytes;
-          OCTOLOD_RETURN_IF_ERROR(soup->commit(n));
-          src += space->size();
-          left -= n;
-        }
-        done += block->size() / record_bytes;
-        progress("order", done, result_.triangle_count);
+    return {};
+  }
+
+  // SoupOrder::by_triangle: the order sort's stream written to the soup.
+  Status drain_order(RecordSorter& order, SoupOutput& soup) {
+    const std::size_t record_bytes = soup_record_bytes(layout_);
+    std::uint64_t done = 0;
+    for (;;) {
+      auto block = order.next();
+      if (!block.ok()) return block.status();
+      if (block->empty()) break;
+      // Through reserve/commit, so a sink sees batches of at most its batch size.
+      const std::byte* src = block->data();
+      std::size_t left = block->size() / record_bytes;
+      while (left > 0) {
+        auto space = soup.reserve(left);
+        if (!space.ok()) return space.status();
+        std::memcpy(space->data(), src, space->size());
+        const std::size_t n = space->size() / record_bytes;
+        OCTOLOD_RETURN_IF_ERROR(soup.commit(n));
+        src += space->size();
+        left -= n;
       }
-      result_.sorts.push_back(current->stats());
+      done += block->size() / record_bytes;
+      progress("order", done, result_.triangle_count);
     }
-    return soup->finish();
+    result_.sorts.push_back(order.stats());
+    return {};
   }
 
   const SoupOptions& options_;

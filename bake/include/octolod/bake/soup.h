@@ -2,17 +2,22 @@
 // vertices and indexed faces becomes a file with one self-contained record per triangle, so
 // later stages (octree build, clustering) never need random access to the vertices.
 //
-// Out of core (the vertices do not fit in half the budget), as in the seed:
+// Out of core (the vertices do not fit in half the budget):
 //   split        the PLY is streamed in portions into a vertex file (records in file order) and
-//                triangle index records (3 vertex ids + triangle id), fed straight into
-//   3 passes     for corner i = 0, 1, 2: external merge sort of the triangle records by corner
-//                i's vertex id, the vertex file scanned in order alongside, the vertex record
-//                written into corner i (the sorted stream of one pass feeds the next pass's sort
-//                directly, no intermediate file).
+//                a triangle index file (3 vertex ids + triangle id per triangle, file order);
+//   window pass  both files are read front to back together, the vertices into a window of
+//                consecutive ids (a quarter of the budget); each triangle whose corners are all
+//                in the window becomes a soup record at once. Real meshes reference vertices
+//                near each other and in file order, so this is nearly every triangle;
+//   3 passes     the seed's, for the rest ("far" triangles): for corner i = 0, 1, 2, external
+//                merge sort by corner i's vertex id, the vertex file scanned in order alongside,
+//                the vertex record written into corner i (each sorted stream feeds the next
+//                pass's sort directly, no intermediate file).
 // In core (the vertices fit in half the budget): the vertices are kept in memory and the
-// triangle records, sorted into the same output order, take all three corners from memory.
-// Both paths write the same bytes for the same input and SoupOptions::order, whatever the
-// budget and thread count.
+// triangle records, in triangle order, take all three corners from memory.
+// SoupOrder::by_triangle gives the same bytes on every path, whatever the budget and thread
+// count; SoupOrder::any the same records in an order that depends on the path and the budget
+// (never on the thread count).
 //
 // The soup file (a temporary: raw native little-endian records, no header) holds
 // triangle_count records of soup_record_bytes(layout) bytes:
@@ -81,14 +86,17 @@ inline TriangleId load_soup_triangle_id(const std::byte* record, VertexLayout la
 }
 
 enum class SoupOrder {
-  // Ascending vertex id of corner 2, then ascending triangle id: what the last dereference pass
-  // produces anyway. The fastest; use it when a later stage sorts the soup again (the octree).
-  by_last_corner,
-  // Ascending triangle id: the PLY's triangle order. Costs one more external sort of the soup.
+  // The order each path produces at no extra cost: in core triangle order; out of core the
+  // window pass's triangles in triangle order, then the far ones by corner 2's vertex id (then
+  // triangle id). Deterministic for the same input and budget. For a later stage that sorts
+  // the soup again (the octree).
+  any,
+  // Ascending triangle id: the PLY's triangle order. Out of core, one more external sort.
   by_triangle,
 };
 
-// Called from the calling thread as the stage advances: stage is "split", "dereference 0..2"
+// Called from the calling thread as the stage advances: stage is "split", "dereference" (the
+// in-core gather or the window pass), "dereference 0..2" (the passes over the far triangles)
 // or "order"; `done` of `total` items (vertices + triangles for the split, triangles after).
 using SoupProgressFn =
     std::function<void(std::string_view stage, std::uint64_t done, std::uint64_t total)>;
@@ -140,7 +148,7 @@ struct SoupOptions {
   std::filesystem::path work_dir;
   // Threads for sorting runs (1 or 2 are useful); the output does not depend on it.
   unsigned threads = 2;
-  SoupOrder order = SoupOrder::by_last_corner;
+  SoupOrder order = SoupOrder::any;
   // Take the out-of-core three-pass path even when the vertices would fit (tests, benchmarks).
   bool force_out_of_core = false;
   SoupProgressFn progress;
@@ -178,6 +186,8 @@ struct SoupResult {
   Bounds bounds;         // of every vertex in the file (unreferenced ones included), model units
   bool in_core = false;  // which path was taken
   bool mesh_consumed = false;  // SoupOptions::mesh_sink received the mesh (in core only)
+  // Out of core: triangles the window pass left to the three sorted passes.
+  std::uint64_t far_triangles = 0;
   SoupStageSeconds seconds;
   std::vector<SortStats> sorts;  // one per external sort, in the order they ran
 };
@@ -188,12 +198,11 @@ struct SoupResult {
 // unsupported for 2^32 triangles or more. On error no temporary file is left behind.
 Result<SoupResult> build_soup(const std::filesystem::path& ply, const SoupOptions& options);
 
-// The soup of a mesh held in memory, as build_soup would write it for the same vertices
-// (layout.floats() per vertex), triangles (3 vertex ids each, every one < vertex count) and
-// order: triangle_count * soup_record_bytes(layout) bytes. For tests and small meshes.
+// The soup of a mesh held in memory, as build_soup writes it with SoupOrder::by_triangle for
+// the same vertices (layout.floats() per vertex) and triangles (3 vertex ids each, every one <
+// vertex count): triangle_count * soup_record_bytes(layout) bytes. For tests and small meshes.
 std::vector<std::byte> dereference_in_memory(std::span<const float> vertices,
                                              std::span<const std::uint32_t> triangles,
-                                             VertexLayout layout,
-                                             SoupOrder order = SoupOrder::by_last_corner);
+                                             VertexLayout layout);
 
 }  // namespace octolod::bake
