@@ -218,14 +218,16 @@ double hausdorff_upper_bound(const NodeMesh& input, const NodeMesh& output, cons
     const float* f = &input.vertices[v * in_stride];
     return Vec{f[0], f[1], f[2]};
   };
-  auto output_triangle = [&](std::uint32_t triangle) {
-    std::array<Vec, 3> corners;
+  // the output's triangles as double corners, converted once: every one is a candidate of many
+  // input vertices and triangles
+  std::vector<std::array<Vec, 3>> output_corners(output.triangle_count());
+  for (std::size_t triangle = 0; triangle < output_corners.size(); ++triangle) {
     for (std::size_t k = 0; k < 3; ++k) {
-      const float* f = &output.vertices[output.indices[3 * std::size_t{triangle} + k] * out_stride];
-      corners[k] = {f[0], f[1], f[2]};
+      const float* f = &output.vertices[output.indices[3 * triangle + k] * out_stride];
+      output_corners[triangle][k] = {f[0], f[1], f[2]};
     }
-    return corners;
-  };
+  }
+  auto output_triangle = [&](std::uint32_t triangle) -> const std::array<Vec, 3>& { return output_corners[triangle]; };
   auto fan = [&](std::uint32_t v) {
     const std::uint32_t c = hints.vertex_cluster[v];
     return hints.fan_triangle.subspan(hints.fan_offset[c], hints.fan_offset[c + 1] - hints.fan_offset[c]);
@@ -249,7 +251,7 @@ double hausdorff_upper_bound(const NodeMesh& input, const NodeMesh& output, cons
       double best2 = std::numeric_limits<double>::infinity();
       const Vec p = input_position(v);
       for (std::uint32_t triangle : fan(v)) {
-        const auto t = output_triangle(triangle);
+        const std::array<Vec, 3>& t = output_triangle(triangle);
         if (near_corner(p, t, total2)) {
           best2 = total2;
           break;
@@ -262,6 +264,10 @@ double hausdorff_upper_bound(const NodeMesh& input, const NodeMesh& output, cons
   }
 
   std::vector<std::uint32_t> unresolved;
+  // the input triangle that last evaluated each output triangle: the image and the fans of a
+  // triangle's corners overlap (corners in one cluster share its fan, a surviving image is in
+  // every corner's fan), and a candidate evaluated twice cannot lower the minimum
+  std::vector<std::uint32_t> evaluated_for(output.triangle_count(), kNoHint);
   for (std::size_t t = 0; t < input.triangle_count(); ++t) {
     const std::uint32_t* corner = &input.indices[3 * t];
     const std::array<Vec, 3> p{input_position(corner[0]), input_position(corner[1]), input_position(corner[2])};
@@ -270,7 +276,7 @@ double hausdorff_upper_bound(const NodeMesh& input, const NodeMesh& output, cons
     // corners is not measured, it cannot raise the total); stops early once it reaches `enough2`
     // (then returns a value >= enough2, only good for taking a minimum)
     auto corner_bound2 = [&](std::uint32_t candidate, double enough2) {
-      const auto tri = output_triangle(candidate);
+      const std::array<Vec, 3>& tri = output_triangle(candidate);
       double worst2 = 0.0;
       for (const Vec& x : p) {
         if (near_corner(x, tri, std::max(worst2, total2))) continue;
@@ -284,10 +290,13 @@ double hausdorff_upper_bound(const NodeMesh& input, const NodeMesh& output, cons
     if (hint != kNoHint && hint < output.triangle_count()) {
       best2 = corner_bound2(hint, std::numeric_limits<double>::infinity());
       if (best2 <= total2) continue;
+      evaluated_for[hint] = static_cast<std::uint32_t>(t);
     }
     if (have_fans) {
       for (std::uint32_t v : {corner[0], corner[1], corner[2]}) {
         for (std::uint32_t candidate : fan(v)) {
+          if (evaluated_for[candidate] == t) continue;
+          evaluated_for[candidate] = static_cast<std::uint32_t>(t);
           best2 = std::min(best2, corner_bound2(candidate, best2));
           if (best2 <= total2) break;
         }
