@@ -151,9 +151,10 @@ class OctreeInput {
     sort_options.memory_budget_bytes = budget;
     sort_options.work_dir = work_;
     sort_options.threads = threads_;
-    // Morton keys have 3 bits per level: a bucket (MSD radix) sort, no merge.
+    // Morton keys have 3 bits per level: a bucket (MSD radix) sort, no merge. Once the soup
+    // stage is done it may take the octree stage's whole sort budget.
     return create_bucket_sorter(soup_record_bytes(layout_), key_, 3 * options_.max_depth,
-                                sort_options);
+                                sort_options, budget_.sort_bytes);
   }
 
   Status read_back(const std::function<void(std::uint64_t)>& progress) {

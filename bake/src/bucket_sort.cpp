@@ -41,10 +41,20 @@ struct Level {
   std::size_t next = 0;
 };
 
+// A bucket in memory, sorted: records[order[k]] with key keys[k], k in [pos, count).
+struct Sorted {
+  const std::byte* records = nullptr;
+  const std::uint64_t* keys = nullptr;
+  const std::uint32_t* order = nullptr;
+  std::size_t count = 0;
+  std::size_t pos = 0;
+};
+
 class BucketSorter final : public RecordSorter {
  public:
   struct Sizes {
     std::size_t stage_records = 0;  // the stage, and the largest bucket sorted in memory
+    std::size_t output_stage_records = 0;  // the same after finish() (>= stage_records)
     std::size_t block_records = 0;  // next()'s blocks, and reads of a bucket distributed again
     unsigned fan_bits = 0;          // log2 of the buckets per level
     std::size_t writer_bytes = 0;   // each bucket file's buffer
@@ -59,6 +69,7 @@ class BucketSorter final : public RecordSorter {
         sizes_(sizes) {}
   ~BucketSorter() override {
     if (distributor_.joinable()) distributor_.join();
+    if (loader_.joinable()) loader_.join();
   }
   BucketSorter(const BucketSorter&) = delete;
   BucketSorter& operator=(const BucketSorter&) = delete;
@@ -94,6 +105,10 @@ class BucketSorter final : public RecordSorter {
 
   void commit(std::size_t records) override {
     assert(staged_ + records <= fill_limit_ && "RecordSorter::commit beyond reserve()");
+    // The keys now, while the records are in the cache (and off the distributing thread).
+    const std::size_t first = fill_begin_ + staged_;
+    key_(std::span<const std::byte>(stage_.get() + first * record_bytes_, records * record_bytes_),
+         std::span<std::uint64_t>(keys_.get() + first, records));
     staged_ += records;
     stats_.records += records;
   }
@@ -105,13 +120,17 @@ class BucketSorter final : public RecordSorter {
     OCTOLOD_RETURN_IF_ERROR(wait_for_distributor());
     if (writers_.empty()) {  // everything is in the stage: sort it there
       stats_.in_core = true;
-      if (staged_ > 0) sort_loaded(stage_.get(), staged_);
+      if (staged_ > 0) current_ = sort_in_place(stage_.get(), staged_, 0, /*keys_known=*/true);
       return {};
     }
     OCTOLOD_RETURN_IF_ERROR(distribute(stage_.get() + fill_begin_ * record_bytes_, staged_,
                                        keys_.get() + fill_begin_));
     staged_ = 0;
     OCTOLOD_RETURN_IF_ERROR(close_level(key_bits_));
+    if (sizes_.output_stage_records > sizes_.stage_records) {  // the caller freed memory
+      sizes_.stage_records = sizes_.output_stage_records;
+      allocate_arrays();
+    }
     return {};
   }
 
@@ -119,7 +138,10 @@ class BucketSorter final : public RecordSorter {
     assert(finished_ && "RecordSorter::next before finish()");
     const Stopwatch watch(stats_.seconds);
     for (;;) {
-      if (loaded_pos_ < loaded_count_) return emit_loaded();
+      if (current_.pos < current_.count) {
+        OCTOLOD_RETURN_IF_ERROR(prefetch());
+        return emit_current();
+      }
       if (stream_) {
         auto block = stream_->read(sizes_.block_records);
         if (!block.ok()) return block.status();
@@ -132,25 +154,35 @@ class BucketSorter final : public RecordSorter {
         stream_.reset();
         stream_file_.remove();
       }
-      while (!levels_.empty() && levels_.back().next == levels_.back().buckets.size())
-        levels_.pop_back();
-      if (levels_.empty()) {
+      if (loader_.joinable()) {  // the next bucket, loaded meanwhile
+        loader_.join();
+        if (!loader_status_.ok()) return loader_status_;
+        current_ = loaded_;
+        current_half_ = 1 - current_half_;
+        ++current_serial_;
+        continue;
+      }
+      Bucket* bucket = next_bucket();
+      if (!bucket) {
         out_count_ = 0;
         return std::span<const std::byte>();
       }
-      Level& level = levels_.back();
-      Bucket bucket = std::move(level.buckets[level.next++]);
-      if (bucket.records == 0) continue;
-      if (bucket.records <= sizes_.stage_records) {
-        OCTOLOD_RETURN_IF_ERROR(load(std::move(bucket)));
-      } else if (bucket.low_bits == 0) {
-        auto reader = RecordReader::open(bucket.file.path(), record_bytes_,
+      Bucket taken = std::move(*bucket);
+      if (taken.records <= sizes_.stage_records) {
+        // The first half, or the whole stage for a bucket larger than half of it.
+        current_half_ = 0;
+        auto loaded = load(std::move(taken), 0, sizes_.stage_records);
+        if (!loaded.ok()) return loaded.status();
+        current_ = loaded.value();
+        ++current_serial_;
+      } else if (taken.low_bits == 0) {
+        auto reader = RecordReader::open(taken.file.path(), record_bytes_,
                                          sizes_.block_records * record_bytes_);
         if (!reader.ok()) return reader.status();
         stream_.emplace(std::move(reader).value());
-        stream_file_ = std::move(bucket.file);
+        stream_file_ = std::move(taken.file);
       } else {
-        OCTOLOD_RETURN_IF_ERROR(distribute_again(std::move(bucket)));
+        OCTOLOD_RETURN_IF_ERROR(distribute_again(std::move(taken)));
       }
     }
   }
@@ -162,8 +194,13 @@ class BucketSorter final : public RecordSorter {
   std::size_t record_bytes() const override { return record_bytes_; }
 
  private:
-  void allocate_arrays() {
+  void allocate_arrays() {  // (re)allocates the stage and the sort arrays for stage_records
     const std::size_t n = sizes_.stage_records;
+    stage_.reset();  // before the new arrays: the old and new never coexist
+    keys_.reset();
+    order_.reset();
+    keys_tmp_.reset();
+    order_tmp_.reset();
     stage_ = PageArray<std::byte>(n * record_bytes_);
     keys_ = PageArray<std::uint64_t>(n);
     order_ = PageArray<std::uint32_t>(n);
@@ -178,11 +215,9 @@ class BucketSorter final : public RecordSorter {
     return bits == 0 ? 0 : static_cast<std::size_t>((key >> shift) & ((std::uint64_t{1} << bits) - 1));
   }
 
-  // Appends `count` records (their keys computed into `keys`) to the open level's bucket
-  // files: consecutive records of one bucket go in one call.
-  Status distribute(const std::byte* records, std::size_t count, std::uint64_t* keys) {
-    key_(std::span<const std::byte>(records, count * record_bytes_),
-         std::span<std::uint64_t>(keys, count));
+  // Appends `count` records with their `keys` to the open level's bucket files: consecutive
+  // records of one bucket go in one call.
+  Status distribute(const std::byte* records, std::size_t count, const std::uint64_t* keys) {
     for (std::size_t i = 0; i < count;) {
       const std::size_t b = bucket_of(keys[i], shift_, bits_);
       std::size_t j = i + 1;
@@ -272,18 +307,61 @@ class BucketSorter final : public RecordSorter {
       auto n = reader->read_into(stage);
       if (!n.ok()) return n.status();
       stats_.bytes_read += n.value() * record_bytes_;
+      key_(std::span<const std::byte>(stage.data(), n.value() * record_bytes_),
+           std::span<std::uint64_t>(keys_.get(), n.value()));
       OCTOLOD_RETURN_IF_ERROR(distribute(stage.data(), n.value(), keys_.get()));
     }
     bucket.file.remove();
     return close_level(bucket.low_bits);
   }
 
-  // Reads a bucket whole into the stage and sorts it there.
-  Status load(Bucket bucket) {
+  // The next non-empty bucket to take, in key order (nullptr at the end): levels distributed
+  // last come first.
+  Bucket* next_bucket() {
+    while (!levels_.empty()) {
+      Level& level = levels_.back();
+      while (level.next < level.buckets.size() && level.buckets[level.next].records == 0)
+        ++level.next;
+      if (level.next < level.buckets.size()) return &level.buckets[level.next++];
+      levels_.pop_back();
+    }
+    return nullptr;
+  }
+
+  // With two threads, while the current bucket is handed out from one half of the stage, the
+  // next one is read and sorted into the other half, if it fits there and needs no further
+  // distribution.
+  Status prefetch() {
+    const std::size_t half = sizes_.stage_records / 2;
+    if (options_.threads < 2 || loader_.joinable() || current_.count > half) return {};
+    if (prefetched_for_ == current_serial_) return {};  // once per bucket
+    prefetched_for_ = current_serial_;
+    if (levels_.empty()) return {};
+    Level& level = levels_.back();
+    while (level.next < level.buckets.size() && level.buckets[level.next].records == 0)
+      ++level.next;
+    if (level.next == level.buckets.size() || level.buckets[level.next].records > half) return {};
+    Bucket bucket = std::move(level.buckets[level.next++]);
+    const std::size_t target = 1 - current_half_;
+    loader_ = std::thread([this, target, b = std::move(bucket)]() mutable {
+      auto loaded = load(std::move(b), target, sizes_.stage_records / 2);
+      if (loaded.ok()) {
+        loaded_ = loaded.value();
+      } else {
+        loader_status_ = loaded.status();
+      }
+    });
+    return {};
+  }
+
+  // Reads a bucket whole into half `half` of the stage (capacity `capacity` records; half 0
+  // with the whole stage's capacity for a large bucket) and sorts it there.
+  Result<Sorted> load(Bucket bucket, std::size_t half, std::size_t capacity) {
+    const std::size_t first = half * (sizes_.stage_records / 2);
+    std::byte* records = stage_.get() + first * record_bytes_;
     auto reader = RecordReader::open(bucket.file.path(), record_bytes_, record_bytes_);
     if (!reader.ok()) return reader.status();
-    auto n = reader->read_into(
-        std::span<std::byte>(stage_.get(), sizes_.stage_records * record_bytes_));
+    auto n = reader->read_into(std::span<std::byte>(records, capacity * record_bytes_));
     if (!n.ok()) return n.status();
     if (n.value() != bucket.records) {
       return io_error("bucket file '" + bucket.file.path().string() + "' holds " +
@@ -292,36 +370,37 @@ class BucketSorter final : public RecordSorter {
     }
     stats_.bytes_read += n.value() * record_bytes_;
     bucket.file.remove();
-    sort_loaded(stage_.get(), n.value());
-    return {};
+    return sort_in_place(records, n.value(), first, /*keys_known=*/false);
   }
 
-  void sort_loaded(const std::byte* records, std::size_t count) {
-    key_(std::span<const std::byte>(records, count * record_bytes_),
-         std::span<std::uint64_t>(keys_.get(), count));
-    std::uint64_t* keys = keys_.get();
-    std::uint32_t* order = order_.get();
-    std::uint64_t* keys_tmp = keys_tmp_.get();
-    std::uint32_t* order_tmp = order_tmp_.get();
+  // Sorts `count` records using the sort arrays from entry `first` on (the keys there already
+  // when `keys_known`).
+  Sorted sort_in_place(const std::byte* records, std::size_t count, std::size_t first,
+                       bool keys_known) {
+    if (!keys_known) {
+      key_(std::span<const std::byte>(records, count * record_bytes_),
+           std::span<std::uint64_t>(keys_.get() + first, count));
+    }
+    std::uint64_t* keys = keys_.get() + first;
+    std::uint32_t* order = order_.get() + first;
+    std::uint64_t* keys_tmp = keys_tmp_.get() + first;
+    std::uint32_t* order_tmp = order_tmp_.get() + first;
     for (std::size_t i = 0; i < count; ++i) order[i] = static_cast<std::uint32_t>(i);
     radix_sort(keys, order, keys_tmp, order_tmp, count);
-    loaded_ = records;
-    loaded_keys_ = keys;
-    loaded_order_ = order;
-    loaded_count_ = count;
-    loaded_pos_ = 0;
+    return Sorted{records, keys, order, count, 0};
   }
 
-  std::span<const std::byte> emit_loaded() {
-    const std::size_t n = std::min(sizes_.block_records, loaded_count_ - loaded_pos_);
+  std::span<const std::byte> emit_current() {
+    const std::size_t n = std::min(sizes_.block_records, current_.count - current_.pos);
     std::byte* out = out_.get();
     for (std::size_t i = 0; i < n; ++i) {
-      const std::size_t k = loaded_pos_ + i;
-      std::memcpy(out + i * record_bytes_, loaded_ + std::size_t{loaded_order_[k]} * record_bytes_,
+      const std::size_t k = current_.pos + i;
+      std::memcpy(out + i * record_bytes_,
+                  current_.records + std::size_t{current_.order[k]} * record_bytes_,
                   record_bytes_);
-      out_keys_[i] = loaded_keys_[k];
+      out_keys_[i] = current_.keys[k];
     }
-    loaded_pos_ += n;
+    current_.pos += n;
     out_count_ = n;
     return std::span<const std::byte>(out, n * record_bytes_);
   }
@@ -358,12 +437,15 @@ class BucketSorter final : public RecordSorter {
 
   std::vector<Level> levels_;  // distributions with buckets still to take, outermost first
 
-  // The sorted records being handed out: loaded_[loaded_order_[k]], k in [pos, count).
-  const std::byte* loaded_ = nullptr;
-  const std::uint64_t* loaded_keys_ = nullptr;
-  const std::uint32_t* loaded_order_ = nullptr;
-  std::size_t loaded_count_ = 0;
-  std::size_t loaded_pos_ = 0;
+  // The bucket being handed out, in half current_half_ of the stage (0 when it takes all).
+  Sorted current_;
+  std::size_t current_half_ = 0;
+  // The helper thread loading the next bucket into the other half (threads >= 2).
+  std::thread loader_;
+  Sorted loaded_;
+  Status loader_status_;
+  std::uint64_t current_serial_ = 0;  // counts the buckets taken
+  std::uint64_t prefetched_for_ = 0;  // the bucket (serial) the last prefetch started under
   // A bucket of one key too large for memory, handed out as read.
   std::optional<RecordReader> stream_;
   TempFile stream_file_;
@@ -377,7 +459,8 @@ class BucketSorter final : public RecordSorter {
 
 Result<std::unique_ptr<RecordSorter>> create_bucket_sorter(std::size_t record_bytes, SortKeyFn key,
                                                            unsigned key_bits,
-                                                           const SortOptions& options) {
+                                                           const SortOptions& options,
+                                                           std::uint64_t output_budget_bytes) {
   assert(record_bytes > 0 && key && key_bits <= 64 && "create_bucket_sorter: bad arguments");
   const std::uint64_t budget = options.memory_budget_bytes;
   const auto too_small = [&] {
@@ -393,8 +476,15 @@ Result<std::unique_ptr<RecordSorter>> create_bucket_sorter(std::size_t record_by
       std::clamp<std::uint64_t>(budget / 16 / record_bytes, 1, kMaxBlockBytes / record_bytes + 1));
   const std::uint64_t block_bytes = sizes.block_records * (record_bytes + sizeof(std::uint64_t));
   if (block_bytes >= stage_budget) return too_small();
-  sizes.stage_records = static_cast<std::size_t>(std::min<std::uint64_t>(
-      (stage_budget - block_bytes) / (record_bytes + kSortBytes), std::uint64_t{1} << 31));
+  // The stage's records for a budget: a quarter left for the bucket files' buffers (of the
+  // input phase's size, also when a bucket is distributed again after finish()).
+  const auto stage_records = [&](std::uint64_t b) {
+    return static_cast<std::size_t>(std::min<std::uint64_t>(
+        (b - budget / 4 - block_bytes) / (record_bytes + kSortBytes), std::uint64_t{1} << 31));
+  };
+  sizes.stage_records = stage_records(budget);
+  sizes.output_stage_records =
+      std::max(sizes.stage_records, stage_records(std::max(budget, output_budget_bytes)));
   const std::size_t writer_min = std::max(kMinWriterBytes, record_bytes);
   const std::uint64_t fan = std::min<std::uint64_t>(std::uint64_t{1} << kMaxFanBits,
                                                     (budget - stage_budget) / writer_min);

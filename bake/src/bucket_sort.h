@@ -18,6 +18,7 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <memory>
 
 #include "octolod/bake/external_sort.h"
@@ -25,10 +26,14 @@
 
 namespace octolod::bake {
 
-// `key` must give keys below 2^key_bits (key_bits <= 64). usage error when the budget cannot
-// hold a few records, their keys and one bucket buffer per bucket of a level.
+// `key` must give keys below 2^key_bits (key_bits <= 64). `output_budget_bytes`: the memory
+// the sorter may use once finish() is called, when the caller has freed some of its own (less
+// than options.memory_budget_bytes means the same); a larger one means larger buckets sorted
+// in memory. usage error when the budget cannot hold a few records, their keys and one bucket
+// buffer per bucket of a level.
 Result<std::unique_ptr<RecordSorter>> create_bucket_sorter(std::size_t record_bytes, SortKeyFn key,
                                                            unsigned key_bits,
-                                                           const SortOptions& options);
+                                                           const SortOptions& options,
+                                                           std::uint64_t output_budget_bytes = 0);
 
 }  // namespace octolod::bake
