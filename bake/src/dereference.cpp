@@ -6,9 +6,8 @@
 #include <cassert>
 #include <cstring>
 #include <string>
+#include <utility>
 #include <vector>
-
-#include "page_array.h"
 
 namespace octolod::bake {
 namespace {
@@ -27,94 +26,89 @@ Status missing_vertex(const RecordReader& vertices, std::uint64_t id) {
 
 }  // namespace
 
-Result<WindowStats> dereference_window(
-    VertexLayout layout, std::size_t window_vertices, RecordReader& triangles,
-    RecordReader& vertices, RecordOutput& out,
-    const std::function<Status(std::span<const TriangleRecord>)>& far) {
+WindowDereferencer::WindowDereferencer(VertexLayout layout, std::size_t window_vertices,
+                                       RecordReader& vertices, RecordOutput& out, FarFn far)
+    : layout_(layout),
+      window_vertices_(window_vertices),
+      vertices_(vertices),
+      out_(out),
+      far_(std::move(far)),
+      window_(window_vertices * layout.bytes()) {
   assert(window_vertices > 0 && (window_vertices & (window_vertices - 1)) == 0 &&
-         "dereference_window: the window holds a power of two of vertices");
-  const std::size_t vertex_bytes = layout.bytes();
-  const std::size_t out_bytes = soup_record_bytes(layout);
-  const std::uint64_t mask = window_vertices - 1;
-  // Vertex v sits in slot v & mask while v is in [end - window_vertices, end).
-  const PageArray<std::byte> window(window_vertices * vertex_bytes);
-  std::uint64_t end = 0;
-  // A read ahead of what a triangle needs, so the window is not refilled vertex by vertex.
-  const std::size_t read_ahead = std::max<std::size_t>(1, window_vertices / 8);
-  // Far triangles, batched.
-  std::vector<TriangleRecord> far_batch;
-  far_batch.reserve(std::max<std::size_t>(1, (std::size_t{64} << 10) / sizeof(TriangleRecord)));
-  WindowStats stats;
-
-  // Reads until vertex `last` is in the window, keeping vertex `keep` (last - keep <
-  // window_vertices) in it.
-  auto fill_to = [&](std::uint64_t keep, std::uint64_t last) -> Status {
-    while (end <= last) {
-      const std::uint64_t want = std::max<std::uint64_t>(last + 1 - end, read_ahead);
-      auto block = vertices.read(std::min<std::uint64_t>(want, keep + window_vertices - end));
-      if (!block.ok()) return block.status();
-      if (block->empty()) return missing_vertex(vertices, last);
-      const std::byte* src = block->data();
-      for (std::size_t n = block->size() / vertex_bytes; n > 0;) {
-        const std::size_t slot = static_cast<std::size_t>(end & mask);
-        const std::size_t run = std::min<std::size_t>(n, window_vertices - slot);
-        std::memcpy(window.get() + slot * vertex_bytes, src, run * vertex_bytes);
-        src += run * vertex_bytes;
-        end += run;
-        n -= run;
-      }
-    }
-    return {};
-  };
-
-  for (;;) {
-    auto block = triangles.read();
-    if (!block.ok()) return block.status();
-    if (block->empty()) break;
-    const std::byte* rec = block->data();
-    std::size_t left = block->size() / sizeof(TriangleRecord);
-    while (left > 0) {
-      auto space = out.reserve(left);
-      if (!space.ok()) return space.status();
-      const std::size_t n = space->size() / out_bytes;
-      std::byte* dst = space->data();
-      std::size_t written = 0;
-      for (std::size_t i = 0; i < n; ++i, rec += sizeof(TriangleRecord)) {
-        TriangleRecord t;
-        std::memcpy(&t, rec, sizeof t);
-        std::uint32_t ids[3];
-        for (int c = 0; c < 3; ++c) ids[c] = static_cast<std::uint32_t>(t.corner[c]);
-        const std::uint64_t lo = std::min({ids[0], ids[1], ids[2]});
-        const std::uint64_t hi = std::max({ids[0], ids[1], ids[2]});
-        const std::uint64_t first = end > window_vertices ? end - window_vertices : 0;
-        if (hi - lo >= window_vertices || lo < first) {
-          far_batch.push_back(t);
-          if (far_batch.size() == far_batch.capacity()) {
-            OCTOLOD_RETURN_IF_ERROR(far(far_batch));
-            stats.far += far_batch.size();
-            far_batch.clear();
-          }
-          continue;
-        }
-        OCTOLOD_RETURN_IF_ERROR(fill_to(lo, hi));
-        std::uint32_t slots[3];
-        for (int c = 0; c < 3; ++c) slots[c] = static_cast<std::uint32_t>(ids[c] & mask);
-        store_soup_record(dst + written * out_bytes, layout,
-                          reinterpret_cast<const float*>(window.get()), slots,
-                          static_cast<std::uint32_t>(t.triangle));
-        ++written;
-      }
-      OCTOLOD_RETURN_IF_ERROR(out.commit(written));
-      stats.near += written;
-      left -= n;
-    }
-  }
-  if (!far_batch.empty()) {
-    OCTOLOD_RETURN_IF_ERROR(far(far_batch));
-    stats.far += far_batch.size();
-  }
-  return stats;
+         "WindowDereferencer: the window holds a power of two of vertices");
+  far_batch_.reserve(std::max<std::size_t>(1, (std::size_t{64} << 10) / sizeof(TriangleRecord)));
 }
+
+// Reads until vertex `last` is in the window, keeping vertex `keep` (last - keep <
+// window_vertices_) in it; reads ahead of what `last` needs, so the window is not refilled
+// vertex by vertex.
+Status WindowDereferencer::fill_to(std::uint64_t keep, std::uint64_t last) {
+  const std::size_t vertex_bytes = layout_.bytes();
+  const std::size_t read_ahead = std::max<std::size_t>(1, window_vertices_ / 8);
+  while (end_ <= last) {
+    const std::uint64_t want = std::max<std::uint64_t>(last + 1 - end_, read_ahead);
+    auto block = vertices_.read(std::min<std::uint64_t>(want, keep + window_vertices_ - end_));
+    if (!block.ok()) return block.status();
+    if (block->empty()) return missing_vertex(vertices_, last);
+    const std::byte* src = block->data();
+    for (std::size_t n = block->size() / vertex_bytes; n > 0;) {
+      const std::size_t slot = static_cast<std::size_t>(end_ & (window_vertices_ - 1));
+      const std::size_t run = std::min<std::size_t>(n, window_vertices_ - slot);
+      std::memcpy(window_.get() + slot * vertex_bytes, src, run * vertex_bytes);
+      src += run * vertex_bytes;
+      end_ += run;
+      n -= run;
+    }
+  }
+  return {};
+}
+
+Status WindowDereferencer::flush_far() {
+  if (far_batch_.empty()) return {};
+  OCTOLOD_RETURN_IF_ERROR(far_(far_batch_));
+  stats_.far += far_batch_.size();
+  far_batch_.clear();
+  return {};
+}
+
+Status WindowDereferencer::add(std::span<const TriangleRecord> triangles) {
+  const std::size_t out_bytes = soup_record_bytes(layout_);
+  const std::uint64_t mask = window_vertices_ - 1;
+  const TriangleRecord* t = triangles.data();
+  std::size_t left = triangles.size();
+  while (left > 0) {
+    auto space = out_.reserve(left);
+    if (!space.ok()) return space.status();
+    const std::size_t n = space->size() / out_bytes;
+    std::byte* dst = space->data();
+    std::size_t written = 0;
+    for (std::size_t i = 0; i < n; ++i, ++t) {
+      std::uint32_t ids[3];
+      for (int c = 0; c < 3; ++c) ids[c] = static_cast<std::uint32_t>(t->corner[c]);
+      const std::uint64_t lo = std::min({ids[0], ids[1], ids[2]});
+      const std::uint64_t hi = std::max({ids[0], ids[1], ids[2]});
+      const std::uint64_t first = end_ > window_vertices_ ? end_ - window_vertices_ : 0;
+      if (hi - lo >= window_vertices_ || lo < first) {
+        far_batch_.push_back(*t);
+        if (far_batch_.size() == far_batch_.capacity()) OCTOLOD_RETURN_IF_ERROR(flush_far());
+        continue;
+      }
+      OCTOLOD_RETURN_IF_ERROR(fill_to(lo, hi));
+      std::uint32_t slots[3];
+      for (int c = 0; c < 3; ++c) slots[c] = static_cast<std::uint32_t>(ids[c] & mask);
+      store_soup_record(dst + written * out_bytes, layout_,
+                        reinterpret_cast<const float*>(window_.get()), slots,
+                        static_cast<std::uint32_t>(t->triangle));
+      ++written;
+    }
+    OCTOLOD_RETURN_IF_ERROR(out_.commit(written));
+    stats_.near += written;
+    left -= n;
+  }
+  return {};
+}
+
+Status WindowDereferencer::finish() { return flush_far(); }
 
 Status dereference_pass(int corner, VertexLayout layout, RecordSorter& sorted,
                         RecordReader& vertices, RecordOutput& out) {

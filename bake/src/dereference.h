@@ -19,11 +19,13 @@
 #include <cstddef>
 #include <functional>
 #include <span>
+#include <vector>
 
 #include "octolod/bake/external_sort.h"
 #include "octolod/bake/soup.h"
 #include "octolod/formats/status.h"
 #include "octolod/formats/vertex_layout.h"
+#include "page_array.h"
 #include "record_file.h"
 
 namespace octolod::bake {
@@ -49,21 +51,42 @@ class RecordOutput {
 };
 
 struct WindowStats {
-  std::uint64_t near = 0;  // triangles written to `out`
-  std::uint64_t far = 0;   // triangles handed to `far`
+  std::uint64_t near = 0;  // triangles written to the output
+  std::uint64_t far = 0;   // triangles handed to the far sink
 };
 
-// The window pass: `triangles` (TriangleRecords, any order) read to the end; `vertices` (the
-// vertex file, layout.bytes() records) positioned at its start; a window of `window_vertices`
-// vertices (a power of two, window_vertices * layout.bytes() bytes of memory). The window only
-// slides forward: it covers the largest id of each near triangle as it comes. Near triangles
-// go to `out` as soup records in triangle-file order, far ones to `far` (batches of whole
-// TriangleRecords, valid during the call only). io error if the vertex file is shorter than an
-// id needs.
-Result<WindowStats> dereference_window(
-    VertexLayout layout, std::size_t window_vertices, RecordReader& triangles,
-    RecordReader& vertices, RecordOutput& out,
-    const std::function<Status(std::span<const TriangleRecord>)>& far);
+// The window pass, fed with triangles (TriangleRecords, any order) as they come: `vertices`
+// is the vertex file (layout.bytes() records) positioned at its start, read into a window of
+// `window_vertices` vertices (a power of two; window_vertices * layout.bytes() bytes of
+// memory) that only slides forward, to cover the largest id of each near triangle as it
+// comes. Near triangles go to `out` as soup records in the order they were added, far ones to
+// `far` (batches of whole TriangleRecords, valid during the call only). The references must
+// outlive the object; io error if the vertex file is shorter than an id needs.
+class WindowDereferencer {
+ public:
+  using FarFn = std::function<Status(std::span<const TriangleRecord>)>;
+  WindowDereferencer(VertexLayout layout, std::size_t window_vertices, RecordReader& vertices,
+                     RecordOutput& out, FarFn far);
+
+  Status add(std::span<const TriangleRecord> triangles);
+  // Hands out the last far triangles.
+  Status finish();
+  const WindowStats& stats() const { return stats_; }
+
+ private:
+  Status fill_to(std::uint64_t keep, std::uint64_t last);
+  Status flush_far();
+
+  VertexLayout layout_;
+  std::size_t window_vertices_;
+  RecordReader& vertices_;
+  RecordOutput& out_;
+  FarFn far_;
+  PageArray<std::byte> window_;  // vertex v in slot v % window_vertices_ while in the window
+  std::uint64_t end_ = 0;        // the window holds [end_ - window_vertices_, end_) (from 0)
+  std::vector<TriangleRecord> far_batch_;
+  WindowStats stats_;
+};
 
 // Out-of-core pass `corner`: `sorted` yields working records with `corner` corners filled, in
 // ascending order of vertex id `corner`; `vertices` is the vertex file (layout.bytes() records)

@@ -124,6 +124,7 @@ class SoupBuilder {
     const PlyInfo info = reader_->info();
     layout_ = info.layout;
     split_total_ = info.vertex_count + info.face_count;
+    face_count_ = info.face_count;
     const std::uint64_t vertex_array_bytes = info.vertex_count * layout_.bytes();
     const bool in_core =
         !options_.force_out_of_core && vertex_array_bytes <= options_.memory_budget_bytes / 2;
@@ -148,7 +149,7 @@ class SoupBuilder {
     result_.in_core = in_core;
     result_.seconds.total = seconds_since(start) - consume_seconds_;
     for (const SortStats& s : result_.sorts) result_.seconds.sort += s.seconds;
-    result_.seconds.split = split_wall_ - split_sort_seconds_;
+    result_.seconds.split = split_wall_ - split_sort_seconds_ - window_in_split_seconds_;
     result_.seconds.dereference =
         std::max(0.0, result_.seconds.total - result_.seconds.split - result_.seconds.sort);
     return std::move(result_);
@@ -173,7 +174,6 @@ class SoupBuilder {
     if (options_.sink && options_.sink_start) {
       SoupSinkStart start;
       start.layout = layout_;
-      start.triangle_count = result_.triangle_count;
       start.bounds = result_.bounds;
       start.in_core = in_core;
       start.free_budget_bytes =
@@ -294,67 +294,58 @@ class SoupBuilder {
   // (dereference.h) dereferences the triangles whose corners lie close together in the vertex
   // file, the seed's three sorted passes the rest.
   Status run_out_of_core() {
-    // Budget: the window pass holds the window and the far triangles' sort (forming runs); the
-    // three passes two sorts (one merging, one forming runs); either with three io buffers
-    // (two readers, the output batch). The window and each sort get a quarter of what four io
-    // buffers leave; the other half is the soup's consumer's (SoupOptions::sink_start), or the
-    // order sort's for SoupOrder::by_triangle. The split (PLY reader, two file writers and a
-    // triangle batch) needs less than the window pass.
-    const std::uint64_t quarter = (options_.memory_budget_bytes - 4 * io_) / 4;
+    // Budget: the window pass holds the window and the far triangles' sort (forming runs), the
+    // passes two sorts (one merging, one forming runs); the window and each sort get a quarter
+    // of what six io buffers and the PLY reader's file buffer leave. The window pass runs
+    // inside the split, with the PLY reader, the triangle batch, the vertex reader and the
+    // output batch; the other half of the budget is the soup's consumer's
+    // (SoupOptions::sink_start), or the order sort's for SoupOrder::by_triangle.
+    const std::uint64_t quarter =
+        (options_.memory_budget_bytes - 6 * io_ - kPlyFileBuffer) / 4;
     TempFile vertex_file = make_temp_file(options_.work_dir, "vertices");
-    TempFile triangle_file = make_temp_file(options_.work_dir, "triangles");
-    {
-      auto vertex_writer = RecordWriter::create(vertex_file.path(), layout_.bytes(), io_);
-      if (!vertex_writer.ok()) return vertex_writer.status();
-      auto triangle_writer = RecordWriter::create(triangle_file.path(), sizeof(TriangleRecord), io_);
-      if (!triangle_writer.ok()) return triangle_writer.status();
-      SplitSinks sinks;
-      sinks.vertices = [&](std::uint64_t, std::span<const float> v) {
-        return vertex_writer->append(reinterpret_cast<const std::byte*>(v.data()),
-                                     v.size() / layout_.floats());
-      };
-      sinks.triangles = [&](std::span<const TriangleRecord> t) {
-        return triangle_writer->append(reinterpret_cast<const std::byte*>(t.data()), t.size());
-      };
-      OCTOLOD_RETURN_IF_ERROR(split(std::move(sinks), nullptr));
-      OCTOLOD_RETURN_IF_ERROR(vertex_writer->finish());
-      OCTOLOD_RETURN_IF_ERROR(triangle_writer->finish());
-    }
-
-    // Where the soup records go: the soup output, or the order sort in front of it.
+    TempFile triangle_file;  // only when faces come before the last vertex
+    std::optional<RecordWriter> vertex_writer;
+    std::optional<RecordWriter> triangle_writer;
+    // The soup records' way out: the soup output, or the order sort in front of it.
     std::unique_ptr<SoupOutput> soup;
     std::unique_ptr<RecordSorter> order;
     std::unique_ptr<RecordOutput> order_input;
-    if (options_.order == SoupOrder::by_triangle) {
-      auto created = RecordSorter::create(
-          soup_record_bytes(layout_),
-          sort_key_u32_at(soup_triangle_id_offset(layout_), soup_record_bytes(layout_)),
-          sort_options(quarter));
-      if (!created.ok()) return created.status();
-      order = std::move(created).value();
-      order_input = std::make_unique<SorterOutput>(*order);
-    } else {
-      // In use: the window, the far triangles' sort, three io buffers.
-      auto opened = open_output(false, 2 * quarter + 3 * io_);
-      if (!opened.ok()) return opened.status();
-      soup = std::move(opened).value();
-    }
-    RecordOutput& records = order ? *order_input : static_cast<RecordOutput&>(*soup);
-
-    // The window pass; the far triangles sorted by corner 0's vertex id meanwhile.
+    RecordOutput* records = nullptr;
+    // The window pass, and the far triangles' sort by corner 0's vertex id.
+    std::optional<RecordReader> window_vertices;
+    std::unique_ptr<ProgressOutput> window_out;
+    std::unique_ptr<WindowDereferencer> window;
     std::unique_ptr<RecordSorter> far;
-    {
-      auto triangles = RecordReader::open(triangle_file.path(), sizeof(TriangleRecord), io_);
-      if (!triangles.ok()) return triangles.status();
-      auto vertices = RecordReader::open(vertex_file.path(), layout_.bytes(), io_);
-      if (!vertices.ok()) return vertices.status();
-      ProgressOutput out(records, [this](std::uint64_t done) {
-        progress("dereference", done, result_.triangle_count);
+
+    // Once the vertex file is complete: the outputs and the window.
+    auto start_window = [&]() -> Status {
+      OCTOLOD_RETURN_IF_ERROR(vertex_writer->finish());
+      vertex_writer.reset();
+      if (options_.order == SoupOrder::by_triangle) {
+        auto created = RecordSorter::create(
+            soup_record_bytes(layout_),
+            sort_key_u32_at(soup_triangle_id_offset(layout_), soup_record_bytes(layout_)),
+            sort_options(quarter));
+        if (!created.ok()) return created.status();
+        order = std::move(created).value();
+        order_input = std::make_unique<SorterOutput>(*order);
+        records = order_input.get();
+      } else {
+        // In use: the window, the far sort, the PLY reader, four io buffers.
+        auto opened = open_output(false, 2 * quarter + 5 * io_ + kPlyFileBuffer);
+        if (!opened.ok()) return opened.status();
+        soup = std::move(opened).value();
+        records = soup.get();
+      }
+      auto reader = RecordReader::open(vertex_file.path(), layout_.bytes(), io_);
+      if (!reader.ok()) return reader.status();
+      window_vertices.emplace(std::move(reader).value());
+      window_out = std::make_unique<ProgressOutput>(*records, [this](std::uint64_t done) {
+        progress("dereference", done, face_count_);
       });
-      auto window = dereference_window(
+      window = std::make_unique<WindowDereferencer>(
           layout_, std::bit_floor(std::max<std::uint64_t>(quarter / layout_.bytes(), 1)),
-          triangles.value(), vertices.value(), out,
-          [&](std::span<const TriangleRecord> t) -> Status {
+          *window_vertices, *window_out, [&](std::span<const TriangleRecord> t) -> Status {
             if (!far) {
               auto created = RecordSorter::create(
                   sizeof(TriangleRecord), sort_key_u32_at(working_vertex_id_offset(layout_, 0), 16),
@@ -364,13 +355,64 @@ class SoupBuilder {
             }
             return far->push(std::as_bytes(t));
           });
-      if (!window.ok()) return window.status();
-      result_.far_triangles = window->far;
+      return {};
+    };
+
+    auto created = RecordWriter::create(vertex_file.path(), layout_.bytes(), io_);
+    if (!created.ok()) return created.status();
+    vertex_writer.emplace(std::move(created).value());
+    SplitSinks sinks;
+    sinks.vertices = [&](std::uint64_t, std::span<const float> v) {
+      return vertex_writer->append(reinterpret_cast<const std::byte*>(v.data()),
+                                   v.size() / layout_.floats());
+    };
+    // The usual order, every vertex before the faces: the window pass runs as faces are read.
+    sinks.vertices_done = [&](const Bounds& bounds) {
+      result_.bounds = bounds;
+      return start_window();
+    };
+    sinks.triangles = [&](std::span<const TriangleRecord> t) -> Status {
+      if (window) {  // timed apart: the pass is dereferencing, not splitting
+        const auto start = std::chrono::steady_clock::now();
+        Status added = window->add(t);
+        window_in_split_seconds_ += seconds_since(start);
+        return added;
+      }
+      if (!triangle_writer) {
+        triangle_file = make_temp_file(options_.work_dir, "triangles");
+        auto writer = RecordWriter::create(triangle_file.path(), sizeof(TriangleRecord), io_);
+        if (!writer.ok()) return writer.status();
+        triangle_writer.emplace(std::move(writer).value());
+      }
+      return triangle_writer->append(reinterpret_cast<const std::byte*>(t.data()), t.size());
+    };
+    OCTOLOD_RETURN_IF_ERROR(split(std::move(sinks), nullptr));
+    if (!window) {  // faces before the last vertex (the seed's triangle file), or none
+      if (triangle_writer) OCTOLOD_RETURN_IF_ERROR(triangle_writer->finish());
+      OCTOLOD_RETURN_IF_ERROR(start_window());
+      if (triangle_writer) {
+        triangle_writer.reset();
+        auto triangles = RecordReader::open(triangle_file.path(), sizeof(TriangleRecord), io_);
+        if (!triangles.ok()) return triangles.status();
+        for (;;) {
+          auto block = triangles->read();
+          if (!block.ok()) return block.status();
+          if (block->empty()) break;
+          OCTOLOD_RETURN_IF_ERROR(window->add(std::span<const TriangleRecord>(
+              reinterpret_cast<const TriangleRecord*>(block->data()),
+              block->size() / sizeof(TriangleRecord))));
+        }
+      }
     }
+    OCTOLOD_RETURN_IF_ERROR(window->finish());
+    result_.far_triangles = window->stats().far;
+    window.reset();
+    window_out.reset();
+    window_vertices.reset();
     triangle_file.remove();
     if (far) {
       OCTOLOD_RETURN_IF_ERROR(far->finish());
-      OCTOLOD_RETURN_IF_ERROR(run_passes(std::move(far), quarter, vertex_file.path(), records));
+      OCTOLOD_RETURN_IF_ERROR(run_passes(std::move(far), quarter, vertex_file.path(), *records));
     }
     vertex_file.remove();
     if (order) {
@@ -452,9 +494,11 @@ class SoupBuilder {
   std::unique_ptr<PlyReader> reader_;
   VertexLayout layout_;
   std::uint64_t split_total_ = 0;
+  std::uint64_t face_count_ = 0;  // declared: the progress total while triangles are counted
   double split_wall_ = 0;
   double split_sort_seconds_ = 0;
   double consume_seconds_ = 0;  // inside SoupOptions::mesh_sink.consume
+  double window_in_split_seconds_ = 0;  // the window pass run from the split's triangle sink
   TempFile soup_file_;
   SoupResult result_;
 };

@@ -22,6 +22,8 @@ Result<SplitResult> split_ply(PlyReader& reader, std::size_t batch_bytes, const 
   const std::size_t batch_records = std::max<std::size_t>(1, batch_bytes / sizeof(TriangleRecord));
   const PageArray<TriangleRecord> batch(batch_records);
   std::uint64_t done = 0;
+  std::uint64_t vertices_seen = 0;
+  bool first_triangles = true;
   for (;;) {
     auto next = reader.next();
     if (!next.ok()) return next.status();
@@ -32,7 +34,12 @@ Result<SplitResult> split_ply(PlyReader& reader, std::size_t batch_bytes, const 
       for (std::size_t i = 0; i < count; ++i) result.bounds.extend(&b.vertices[i * floats]);
       OCTOLOD_RETURN_IF_ERROR(sinks.vertices(b.first, b.vertices));
       done += count;
+      vertices_seen += count;
     } else {
+      if (first_triangles && sinks.vertices_done && vertices_seen == result.vertex_count) {
+        OCTOLOD_RETURN_IF_ERROR(sinks.vertices_done(result.bounds));
+      }
+      first_triangles = false;
       const std::size_t count = b.triangles.size() / 3;
       constexpr std::uint64_t kMaxTriangles = std::numeric_limits<std::uint32_t>::max();
       if (b.first + count > kMaxTriangles) {

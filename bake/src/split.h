@@ -23,6 +23,10 @@ struct SplitSinks {
   std::function<Status(std::uint64_t first, std::span<const float> vertices)> vertices;
   // Consecutive triangles; the span is valid during the call only.
   std::function<Status(std::span<const TriangleRecord> triangles)> triangles;
+  // Optional: called once before the first triangle batch if every vertex came before it (the
+  // vertex element precedes the faces), with the bounds of all vertices. An error it returns
+  // ends the split.
+  std::function<Status(const Bounds& bounds)> vertices_done;
   // Optional: vertices + triangles read so far (triangles counted as their PLY faces' share).
   std::function<void(std::uint64_t done)> progress;
 };

@@ -3,12 +3,14 @@
 // later stages (octree build, clustering) never need random access to the vertices.
 //
 // Out of core (the vertices do not fit in half the budget):
-//   split        the PLY is streamed in portions into a vertex file (records in file order) and
-//                a triangle index file (3 vertex ids + triangle id per triangle, file order);
-//   window pass  both files are read front to back together, the vertices into a window of
-//                consecutive ids (a quarter of the budget); each triangle whose corners are all
-//                in the window becomes a soup record at once. Real meshes reference vertices
-//                near each other and in file order, so this is nearly every triangle;
+//   split        the PLY is streamed in portions: vertices into a vertex file (records in file
+//                order), triangles (3 vertex ids + triangle id) straight into
+//   window pass  which reads the vertex file front to back into a window of consecutive ids (a
+//                quarter of the budget) as the triangles come; each triangle whose corners are
+//                all in the window becomes a soup record at once. Real meshes reference
+//                vertices near each other and in file order, so this is nearly every triangle.
+//                (A PLY whose faces come before its last vertex has its triangles written to a
+//                triangle index file first, the seed's split, and read back for the pass);
 //   3 passes     the seed's, for the rest ("far" triangles): for corner i = 0, 1, 2, external
 //                merge sort by corner i's vertex id, the vertex file scanned in order alongside,
 //                the vertex record written into corner i (each sorted stream feeds the next
@@ -104,7 +106,6 @@ using SoupProgressFn =
 // What SoupOptions::sink_start learns before the first record reaches the sink.
 struct SoupSinkStart {
   VertexLayout layout;
-  std::uint64_t triangle_count = 0;  // records the sink will receive
   Bounds bounds;                     // of every vertex (as SoupResult::bounds), model units
   bool in_core = false;              // which path feeds the sink
   // Bytes of memory_budget_bytes the stage leaves unused while it feeds the sink: what the
@@ -157,8 +158,9 @@ struct SoupOptions {
   // its own sort without the soup ever touching the disk. SoupResult::soup is then empty. An
   // error the sink returns ends build_soup with that error. Called from the calling thread.
   std::function<Status(std::span<const std::byte> records)> sink;
-  // Optional, with `sink`: called once after the split, before the first record reaches `sink`
-  // (also when there are none). An error it returns ends build_soup with that error.
+  // Optional, with `sink`: called once, before the first record reaches `sink` (also when
+  // there are none), once every vertex has been read (out of core possibly while the faces are
+  // still being read). An error it returns ends build_soup with that error.
   std::function<Status(const SoupSinkStart& start)> sink_start;
   // Optional: when the vertices fit (the in-core path) and mesh_sink.accepts the PLY's declared
   // vertex and face counts, the split keeps the triangles in memory and mesh_sink.consume gets
@@ -171,7 +173,8 @@ struct SoupOptions {
 inline constexpr std::uint64_t kMinSoupBudget = 256 * 1024;
 
 struct SoupStageSeconds {
-  double split = 0;        // reading the PLY, writing the vertex file (wall, sorting excluded)
+  double split = 0;        // reading the PLY, writing the vertex file (wall; sorting and the
+                           // window pass run from the split excluded)
   double sort = 0;         // inside the external sorts (run formation and merging)
   double dereference = 0;  // scanning vertices and writing corners (sorting excluded)
   double total = 0;        // wall time of build_soup, SoupMeshSink::consume excluded
