@@ -5,11 +5,12 @@
 // with N x depth). Here the soup is sorted once by Morton key (external sort), which makes
 // every node a contiguous run of the sorted stream, and the tree is decided while that stream
 // passes by: a node whose triangles are still arriving is a *candidate* whose records are
-// buffered; when it collects more than max_tris it splits (its buffered records are replayed
-// into its children, which become the new candidates), and when the stream leaves its key range
-// it is a leaf and its records go to the caller. Memory: the candidate buffers, at most
-// max_tris + 1 records per level on the current path (a leaf at max_depth is unbounded: it
-// cannot split, so it keeps everything it gets).
+// buffered (runs of the stream appended at once); when it collects more than max_tris it
+// splits: its buffer, sorted, is one run per child, every child but the last is complete and
+// settled at once (split again or handed out as a leaf), the last becomes the candidate. When
+// the stream leaves the candidate's key range it is a leaf and its records go to the caller.
+// Memory: one candidate buffer of at most max_tris + 1 records (a leaf at max_depth is
+// unbounded: it cannot split, so it keeps everything it gets) and a copy of a settled leaf.
 //
 // Rules (seed 3.4): a node splits while it holds more than max_tris triangles and its depth is
 // below max_depth; each triangle belongs to exactly one leaf, the one whose cell holds its
@@ -66,10 +67,14 @@ class OctreeBuilder {
   std::vector<OctreeNode>& nodes() { return nodes_; }
 
  private:
-  Status add(const std::byte* record, std::uint64_t key);
-  Status split_candidate();
+  void open_candidate(std::uint64_t key);
+  std::int32_t new_child(std::int32_t parent, std::uint64_t key);
+  Status split_candidate_while_full();
+  Status settle(std::int32_t node, std::size_t begin, std::size_t end);
   Status close_candidate();
-  void order_equal_keys();
+  Status hand_out_leaf(std::int32_t node, std::vector<std::byte>&& records,
+                       std::span<const std::uint64_t> keys);
+  void order_equal_keys(std::vector<std::byte>& records, std::span<const std::uint64_t> keys) const;
   std::uint64_t prefix_of(std::uint64_t key, std::uint32_t depth) const {
     return key >> (3 * (max_depth_ - depth));
   }
