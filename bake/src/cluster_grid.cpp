@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numeric>
+#include <optional>
 #include <utility>
 #include <vector>
 
@@ -117,6 +118,19 @@ double surface_area(const NodeMesh& mesh) {
   return area;
 }
 
+// An upper bound of count_grid_triangles(node, 1) without clustering: at g = 1 every unlocked
+// vertex is in the one cell, so a surviving triangle has at least two locked corners.
+std::size_t coarsest_count_bound(const PreparedNode& node) {
+  const std::vector<std::uint8_t>& locked = node.boundary.locked_position;
+  const std::vector<std::uint32_t>& position = node.positions.of_vertex;
+  std::size_t count = 0;
+  for (std::size_t t = 0; t < node.mesh.triangle_count(); ++t) {
+    const std::uint32_t* corner = &node.mesh.indices[3 * t];
+    count += locked[position[corner[0]]] + locked[position[corner[1]]] + locked[position[corner[2]]] >= 2;
+  }
+  return count;
+}
+
 }  // namespace
 
 std::size_t count_grid_triangles(const PreparedNode& node, std::uint32_t g) {
@@ -146,8 +160,15 @@ std::uint32_t choose_grid_resolution(const PreparedNode& node, std::size_t targe
   // about 1.5 A / s^2 cubes of side s, and a closed mesh has about 2 triangles per vertex.
   // Then power-law corrections through the last count, keeping a feasible lower and an
   // infeasible upper end; stop once the count is within 15% below the target (at most 12 counts).
-  const std::size_t coarsest = count_grid_triangles(node, 1);
-  if (coarsest > target) return 1;
+  // The count at g = 1 (the fallback) is only needed when its upper bound does not settle the
+  // comparisons with it: most searches skip it.
+  const std::size_t coarsest_bound = coarsest_count_bound(node);
+  std::optional<std::size_t> coarsest;
+  auto count_coarsest = [&] {
+    if (!coarsest) coarsest = count_grid_triangles(node, 1);
+    return *coarsest;
+  };
+  if (coarsest_bound > target && count_coarsest() > target) return 1;
   constexpr std::uint32_t kMaxResolution = 1u << 16;
   Bounds domain = node.cell;
   domain.extend(node.mesh_bounds);
@@ -161,7 +182,7 @@ std::uint32_t choose_grid_resolution(const PreparedNode& node, std::size_t targe
   // the feasible resolution with the most triangles so far: counts are not monotone in g (a
   // grid aligned with a city's lots collapses every box into a column of cells)
   std::uint32_t best = 1;
-  std::size_t best_count = coarsest;
+  std::size_t best_count = 0;
   for (int evaluation = 0; evaluation < 12 && hi - lo > 1; ++evaluation) {
     g = std::clamp(g, lo + 1, hi - 1);
     const std::size_t count = count_grid_triangles(node, g);
@@ -179,7 +200,9 @@ std::uint32_t choose_grid_resolution(const PreparedNode& node, std::size_t targe
     g = static_cast<std::uint32_t>(std::lround(next));
     if (g <= lo || g >= hi) g = lo + (hi - lo) / 2;  // the model stalled: bisect
   }
-  return best;
+  // g = 1 unless the search found more triangles (within the target) than it keeps
+  if (best_count > coarsest_bound) return best;
+  return best_count > count_coarsest() ? best : 1;
 }
 
 ClusteredMesh cluster_grid(const PreparedNode& node, std::uint32_t g) {
