@@ -3,11 +3,12 @@
 //
 //   soup      the PLY becomes one self-contained record per triangle (octolod/bake/soup.h)
 //   octree    the soup is sorted by the Morton code of each triangle's centroid in the model's
-//             bounding cube (external merge sort; when the soup stage runs out of core its
-//             records go straight into this sort's runs, no soup file), and one streaming
-//             pass over the sorted records decides the tree (a node splits while it holds
-//             more than max_tris triangles and is shallower than max_depth) and hands every
-//             leaf its contiguous run of triangles
+//             bounding cube (an external bucket sort, bucket_sort.h; the soup stage's records
+//             go straight into it, no soup file), and one streaming pass over the sorted
+//             records decides the tree (a node splits while it holds more than max_tris
+//             triangles and is shallower than max_depth) and hands every leaf its contiguous
+//             run of triangles, by (key, triangle id). When the indexed mesh fits the budget
+//             the keys are sorted in memory instead and the leaves gathered from the mesh
 //   lods      meanwhile, on worker threads, heaviest ready node first: each leaf is indexed
 //             (exact vertex dedup) into its LOD 0 (the original triangles, error 0) and a chain
 //             of simplifications (simplify.h); every internal node, once its children are done,
