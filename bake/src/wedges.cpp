@@ -33,43 +33,42 @@ std::array<double, 3> cross(const std::array<double, 3>& a, const std::array<dou
 }
 
 // Per input triangle, an output triangle near its image under the clustering (for the error
-// bound): the image itself when it survived; else an output triangle on one of the image's
-// edges (a triangle collapsed to a segment); else one at one of its clusters (collapsed to a
-// point); else kNoTriangle (the image's neighbourhood cancelled entirely).
+// bound): the image itself when it survived; else the first output triangle on one of the
+// image's edges (a triangle collapsed to a segment); else the first one at one of its clusters
+// (collapsed to a point); else kNoTriangle (the image's neighbourhood cancelled entirely).
+// `kept_cluster` holds the clusters of the output triangles' corners; the fans (CSR, output
+// triangles in increasing order per cluster) are those of ClusteredMesh.
 std::vector<std::uint32_t> nearby_output_triangles(const NodeMesh& mesh, const std::vector<std::uint32_t>& cluster,
-                                                   std::uint32_t cluster_count,
                                                    const std::vector<std::uint32_t>& kept_cluster,
+                                                   const std::vector<std::uint32_t>& fan_offset,
+                                                   const std::vector<std::uint32_t>& fan_triangle,
                                                    const std::vector<std::uint32_t>& candidate_of_triangle,
                                                    const std::vector<std::uint32_t>& output_of_candidate) {
   const std::size_t triangle_count = mesh.triangle_count();
   std::vector<std::uint32_t> nearby(triangle_count, kNoTriangle);
-  bool pending = false;
+  // the first output triangle with corners at clusters a and b (a != b): the first of a's fan
+  // that has a corner at b
+  auto edge_triangle = [&](std::uint32_t a, std::uint32_t b) {
+    for (std::uint32_t i = fan_offset[a]; i < fan_offset[a + 1]; ++i) {
+      const std::uint32_t* corner = &kept_cluster[3 * std::size_t{fan_triangle[i]}];
+      if (corner[0] == b || corner[1] == b || corner[2] == b) return fan_triangle[i];
+    }
+    return kNoTriangle;
+  };
+  auto cluster_triangle = [&](std::uint32_t a) {
+    return fan_offset[a] < fan_offset[a + 1] ? fan_triangle[fan_offset[a]] : kNoTriangle;
+  };
   for (std::size_t t = 0; t < triangle_count; ++t) {
     const std::uint32_t candidate = candidate_of_triangle[t];
     if (candidate != kNoTriangle) nearby[t] = output_of_candidate[candidate];
-    pending = pending || nearby[t] == kNoTriangle;
-  }
-  if (!pending || kept_cluster.empty()) return nearby;
-
-  FlatHashMap<2> edge_triangle(kept_cluster.size());
-  std::vector<std::uint32_t> cluster_triangle(cluster_count, kNoTriangle);
-  for (std::size_t o = 0; o < kept_cluster.size() / 3; ++o) {
-    for (std::size_t k = 0; k < 3; ++k) {
-      const std::uint32_t a = kept_cluster[3 * o + k], b = kept_cluster[3 * o + (k + 1) % 3];
-      bool inserted = false;
-      edge_triangle.find_or_insert({std::min(a, b), std::max(a, b)}, static_cast<std::uint32_t>(o), inserted);
-      if (cluster_triangle[a] == kNoTriangle) cluster_triangle[a] = static_cast<std::uint32_t>(o);
-    }
-  }
-  for (std::size_t t = 0; t < triangle_count; ++t) {
     if (nearby[t] != kNoTriangle) continue;
     const std::uint32_t c[3] = {cluster[mesh.indices[3 * t]], cluster[mesh.indices[3 * t + 1]],
                                 cluster[mesh.indices[3 * t + 2]]};
     for (std::size_t k = 0; k < 3 && nearby[t] == kNoTriangle; ++k) {
       const std::uint32_t a = c[k], b = c[(k + 1) % 3];
-      if (a != b) nearby[t] = edge_triangle.find({std::min(a, b), std::max(a, b)});
+      if (a != b) nearby[t] = edge_triangle(a, b);
     }
-    for (std::size_t k = 0; k < 3 && nearby[t] == kNoTriangle; ++k) nearby[t] = cluster_triangle[c[k]];
+    for (std::size_t k = 0; k < 3 && nearby[t] == kNoTriangle; ++k) nearby[t] = cluster_triangle(c[k]);
   }
   return nearby;
 }
@@ -348,8 +347,6 @@ ClusteredMesh build_clustered_mesh(const NodeMesh& mesh, const Clustering& clust
   for (std::uint32_t w : kept) out.indices.push_back(output_id[w]);
   std::vector<std::uint32_t> kept_cluster(kept.size());
   for (std::size_t i = 0; i < kept.size(); ++i) kept_cluster[i] = static_cast<std::uint32_t>(order[kept[i]] >> 32);
-  result.nearby_output_triangle = nearby_output_triangles(mesh, cluster, clustering.count, kept_cluster,
-                                                          candidate_of_triangle, output_of_candidate);
   result.vertex_cluster = cluster;
   result.fan_offset.assign(std::size_t{clustering.count} + 1, 0);
   for (std::uint32_t c : kept_cluster) ++result.fan_offset[c + 1];
@@ -358,6 +355,9 @@ ClusteredMesh build_clustered_mesh(const NodeMesh& mesh, const Clustering& clust
   std::vector<std::uint32_t> fill(result.fan_offset.begin(), result.fan_offset.end() - 1);
   for (std::size_t i = 0; i < kept_cluster.size(); ++i)
     result.fan_triangle[fill[kept_cluster[i]]++] = static_cast<std::uint32_t>(i / 3);
+  result.nearby_output_triangle = nearby_output_triangles(mesh, cluster, kept_cluster, result.fan_offset,
+                                                          result.fan_triangle, candidate_of_triangle,
+                                                          output_of_candidate);
   return result;
 }
 
