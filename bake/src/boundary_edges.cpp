@@ -1,8 +1,10 @@
-// Boundary edges of a node mesh by an edge table (flat hash) on position-id pairs (seed 3.5, 4.4).
+// Boundary edges of a node mesh by an edge table on position-id pairs (seed 3.5, 4.4).
 #include "boundary_edges.h"
 
 #include <algorithm>
 #include <cstring>
+#include <utility>
+#include <vector>
 
 #include "flat_hash.h"
 
@@ -32,32 +34,45 @@ PositionIds make_position_ids(const NodeMesh& mesh) {
 }
 
 Boundary find_boundary(const NodeMesh& mesh, const PositionIds& positions) {
-  // Edge table keyed on (smaller, larger) position id: uses and first corner per edge, edges in
-  // order of first use.
-  struct EdgeRecord {
-    std::uint32_t uses;
-    std::uint32_t first_corner;  // 3 * triangle + k: the edge runs from corner k to corner k+1
-  };
-  std::vector<EdgeRecord> records;
-  records.reserve(mesh.indices.size() / 2 + 16);
-  FlatHashMap<2> table(mesh.indices.size());
-  for (std::size_t c = 0; c < mesh.indices.size(); ++c) {
+  // Edge table by a counting sort on the smaller position id: every bucket (the edges of one
+  // position, a handful on a surface) sorted by (larger id, corner), so equal edges form runs whose
+  // first entry is the edge's first use. Sequential passes instead of a hash table over every
+  // corner, whose probes missed the cache.
+  const std::size_t corners = mesh.indices.size();
+  auto edge_ends = [&](std::size_t c) {
     const std::size_t next = c % 3 == 2 ? c - 2 : c + 1;
-    const std::uint32_t pa = positions.of_vertex[mesh.indices[c]];
-    const std::uint32_t pb = positions.of_vertex[mesh.indices[next]];
-    if (pa == pb) continue;
-    bool inserted = false;
-    const std::uint32_t r = table.find_or_insert({std::min(pa, pb), std::max(pa, pb)},
-                                                 static_cast<std::uint32_t>(records.size()), inserted);
-    if (inserted) records.push_back({0, static_cast<std::uint32_t>(c)});
-    ++records[r].uses;
+    return std::pair{positions.of_vertex[mesh.indices[c]], positions.of_vertex[mesh.indices[next]]};
+  };
+  std::vector<std::uint32_t> bucket_start(std::size_t{positions.count} + 1, 0);
+  for (std::size_t c = 0; c < corners; ++c) {
+    const auto [pa, pb] = edge_ends(c);
+    if (pa != pb) ++bucket_start[std::min(pa, pb) + 1];
   }
+  for (std::size_t p = 0; p < positions.count; ++p) bucket_start[p + 1] += bucket_start[p];
+  // (larger position id << 32 | corner): the corner c is the edge from corner c to corner c+1
+  std::vector<std::uint64_t> entries(bucket_start.back());
+  std::vector<std::uint32_t> fill(bucket_start.begin(), bucket_start.end() - 1);
+  for (std::size_t c = 0; c < corners; ++c) {
+    const auto [pa, pb] = edge_ends(c);
+    if (pa != pb) entries[fill[std::min(pa, pb)]++] = std::uint64_t{std::max(pa, pb)} << 32 | c;
+  }
+  std::vector<std::uint32_t> first_corners;  // of the edges used an odd number of times
+  for (std::size_t p = 0; p < positions.count; ++p) {
+    const auto begin = entries.begin() + bucket_start[p], end = entries.begin() + bucket_start[p + 1];
+    std::sort(begin, end);
+    for (auto run = begin; run != end;) {
+      auto next = run + 1;
+      while (next != end && (*next >> 32) == (*run >> 32)) ++next;
+      if ((next - run) % 2 == 1) first_corners.push_back(static_cast<std::uint32_t>(*run));
+      run = next;
+    }
+  }
+  std::sort(first_corners.begin(), first_corners.end());  // order of first use
 
   Boundary boundary;
   boundary.locked_position.assign(positions.count, 0);
-  for (const EdgeRecord& record : records) {
-    if (record.uses % 2 == 0) continue;
-    const std::uint32_t c = record.first_corner;
+  boundary.edges.reserve(first_corners.size());
+  for (const std::uint32_t c : first_corners) {
     const std::uint32_t next = c % 3 == 2 ? c - 2 : c + 1;
     const BoundaryEdge edge{mesh.indices[c], mesh.indices[next]};
     boundary.edges.push_back(edge);
