@@ -131,13 +131,14 @@ bool same(const std::vector<Rec>& a, const std::vector<Rec>& b) {
          std::memcmp(a.data(), b.data(), a.size() * sizeof(Rec)) == 0;
 }
 
-TEST(ExternalSort, FitsBudgetSortsInCoreWithoutTempFiles) {
+// Input that fits the budget: sorted in memory, no temporary file.
+void expect_sorted_in_core(const SorterFactory& make, std::uint32_t seed) {
   WorkDir dir;
-  const auto in = make_records(5000, 300, 1);
+  const auto in = make_records(5000, 300, seed);
   SortOptions options;
   options.memory_budget_bytes = 4 << 20;
   options.work_dir = dir.path();
-  const SortRun run = run_sorter(in, options);
+  const SortRun run = run_sorter(in, options, make);
   EXPECT_TRUE(same(run.out, stable_sorted(in)));
   EXPECT_TRUE(run.stats.in_core);
   EXPECT_EQ(run.stats.runs, 0u);
@@ -146,6 +147,8 @@ TEST(ExternalSort, FitsBudgetSortsInCoreWithoutTempFiles) {
   EXPECT_EQ(run.stats.records, in.size());
   EXPECT_EQ(dir.file_count(), 0u);
 }
+
+TEST(ExternalSort, FitsBudgetSortsInCoreWithoutTempFiles) { expect_sorted_in_core(merge_sorter, 1); }
 
 TEST(ExternalSort, TinyBudgetMergesInSeveralPassesAndStaysStable) {
   WorkDir dir;
@@ -367,18 +370,7 @@ TEST(ExternalSort, ReadErrorDuringMergeIsAnIoErrorAndLeavesNoFiles) {
 // The bucket sort.
 
 TEST(BucketSort, FitsBudgetSortsInCoreWithoutTempFiles) {
-  WorkDir dir;
-  const auto in = make_records(5000, 300, 11);
-  SortOptions options;
-  options.memory_budget_bytes = 4 << 20;
-  options.work_dir = dir.path();
-  const SortRun run = run_sorter(in, options, bucket_sorter(9));
-  EXPECT_TRUE(same(run.out, stable_sorted(in)));
-  EXPECT_TRUE(run.stats.in_core);
-  EXPECT_EQ(run.stats.runs, 0u);
-  EXPECT_EQ(run.stats.bytes_written, 0u);
-  EXPECT_EQ(run.stats.records, in.size());
-  EXPECT_EQ(dir.file_count(), 0u);
+  expect_sorted_in_core(bucket_sorter(9), 11);
 }
 
 // 20-bit keys, 64 KiB: buckets of the first level (9 bits) are too large for memory and are

@@ -74,22 +74,6 @@ class BucketSorter final : public RecordSorter {
   BucketSorter(const BucketSorter&) = delete;
   BucketSorter& operator=(const BucketSorter&) = delete;
 
-  Status push(std::span<const std::byte> records) override {
-    assert(records.size() % record_bytes_ == 0 && "RecordSorter::push of a partial record");
-    std::size_t n = records.size() / record_bytes_;
-    const std::byte* src = records.data();
-    while (n > 0) {
-      auto space = reserve(n);
-      if (!space.ok()) return space.status();
-      std::memcpy(space->data(), src, space->size());
-      const std::size_t take = space->size() / record_bytes_;
-      commit(take);
-      src += space->size();
-      n -= take;
-    }
-    return {};
-  }
-
   Result<std::span<std::byte>> reserve(std::size_t max_records) override {
     assert(!finished_ && "RecordSorter::reserve after finish()");
     const Stopwatch watch(stats_.seconds);

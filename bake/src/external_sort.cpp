@@ -256,27 +256,16 @@ class ExternalSorter final : public RecordSorter {
   ExternalSorter(const ExternalSorter&) = delete;
   ExternalSorter& operator=(const ExternalSorter&) = delete;
 
-  Status push(std::span<const std::byte> records) override {
-    assert(state_ == State::input && "RecordSorter::push after finish()");
-    assert(records.size() % record_bytes_ == 0 && "RecordSorter::push of a partial record");
-    Stopwatch watch(stats_.seconds);
-    std::size_t n = records.size() / record_bytes_;
-    const std::byte* src = records.data();
-    while (n > 0) {
-      auto space = room(n);
-      if (!space.ok()) return space.status();
-      std::memcpy(space->data(), src, space->size());
-      const std::size_t take = space->size() / record_bytes_;
-      commit(take);
-      src += space->size();
-      n -= take;
-    }
-    return {};
-  }
-
   Result<std::span<std::byte>> reserve(std::size_t max_records) override {
+    assert(state_ == State::input && "RecordSorter::reserve after finish()");
     Stopwatch watch(stats_.seconds);
-    return room(max_records);
+    if (!run_.records) {
+      run_.allocate(record_bytes_, run_capacity_);
+      fill_limit_ = run_capacity_;
+    }
+    if (fill_count_ == fill_limit_) OCTOLOD_RETURN_IF_ERROR(make_room());
+    const std::size_t n = std::min(max_records, fill_limit_ - fill_count_);
+    return std::span<std::byte>(run_.record(fill_begin_ + fill_count_), n * record_bytes_);
   }
 
   void commit(std::size_t records) override {
@@ -401,18 +390,6 @@ class ExternalSorter final : public RecordSorter {
     }
     merge_cv_.notify_all();
     merger_.join();
-  }
-
-  // reserve() without the stopwatch (push() has its own).
-  Result<std::span<std::byte>> room(std::size_t max_records) {
-    assert(state_ == State::input && "RecordSorter::reserve after finish()");
-    if (!run_.records) {
-      run_.allocate(record_bytes_, run_capacity_);
-      fill_limit_ = run_capacity_;
-    }
-    if (fill_count_ == fill_limit_) OCTOLOD_RETURN_IF_ERROR(make_room());
-    const std::size_t n = std::min(max_records, fill_limit_ - fill_count_);
-    return std::span<std::byte>(run_.record(fill_begin_ + fill_count_), n * record_bytes_);
   }
 
   // The filled part of the run buffer must go to disk before more records fit. With one thread,
@@ -585,6 +562,23 @@ class ExternalSorter final : public RecordSorter {
 };
 
 }  // namespace
+
+Status RecordSorter::push(std::span<const std::byte> records) {
+  assert(records.size() % record_bytes() == 0 && "RecordSorter::push of a partial record");
+  const std::size_t record_bytes = this->record_bytes();
+  std::size_t n = records.size() / record_bytes;
+  const std::byte* src = records.data();
+  while (n > 0) {
+    auto space = reserve(n);
+    if (!space.ok()) return space.status();
+    std::memcpy(space->data(), src, space->size());
+    const std::size_t take = space->size() / record_bytes;
+    commit(take);
+    src += space->size();
+    n -= take;
+  }
+  return {};
+}
 
 SortKeyFn sort_key_u32_at(std::size_t offset, std::size_t record_bytes) {
   assert(offset + 4 <= record_bytes && "sort key beyond the record");

@@ -77,7 +77,8 @@ class RecordSorter {
   virtual ~RecordSorter() = default;
 
   // Copies whole records (records.size() a multiple of record_bytes); only before finish().
-  virtual Status push(std::span<const std::byte> records) = 0;
+  // Through reserve() and commit().
+  Status push(std::span<const std::byte> records);
   // Zero-copy push: room for between 1 and `max_records` records inside the run buffer (writing
   // a run first when it is full); fill a prefix, then commit() it before any other call.
   virtual Result<std::span<std::byte>> reserve(std::size_t max_records) = 0;
