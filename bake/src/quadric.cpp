@@ -268,7 +268,7 @@ void minimize_quadric_free_tail(int n, int k, const double* q, const double* mea
                                 double* v) {
   assert(k >= 0 && k < n && n <= kMaxQuadricDim && "free coordinates k..n-1 must be non-empty");
   const int m = n - k;
-  Matrix mat{};  // the m x m block is written below
+  Matrix mat;  // only its m x m block, written below, is read
   Vector rhs{};
   const double* b = q + n * (n + 1) / 2;
   for (int i = 0; i < m; ++i) rhs[static_cast<std::size_t>(i)] = -b[k + i];
