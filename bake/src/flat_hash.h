@@ -1,5 +1,5 @@
 // Flat open-addressing hash tables (linear probing, power-of-two capacity sized once for a known
-// number of keys) for the per-node simplification's edge, cluster-triple, position and vertex
+// number of keys) for the per-node simplification's cluster, cluster-triple, position and vertex
 // tables, where std::unordered_map's node allocation per entry dominated the run time. They are
 // never iterated, so no result depends on a table's internal order.
 #pragma once
