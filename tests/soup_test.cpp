@@ -187,12 +187,14 @@ TEST(Soup, SplitWritesVertexAndTriangleFilesInFileOrder) {
   }
 }
 
-// The seed's out-of-core passes with a tiny budget (hundreds of runs, multi-pass merges) write
+// The seed's out-of-core passes with a 1 MiB budget (dozens of runs, multi-pass merges) write
 // exactly the bytes the in-core path and the in-memory dereference produce: 300K triangles,
 // shuffled vertex ids (nearly all far for the window pass).
 TEST(Soup, OutOfCoreWithTinyBudgetIsBitIdenticalToInCore) {
   WorkDir dir;
-  const GridMesh mesh = make_grid(500, 300);
+  constexpr std::uint32_t kW = 500, kH = 300;
+  const GridMesh mesh = make_grid(kW, kH);
+  const std::uint64_t triangles = 2u * kW * kH + 1;
   write_mesh(dir.file("grid.ply"), mesh);
   const std::string expected =
       as_string(dereference_in_memory(mesh.vertices, mesh.triangles, mesh.layout));
@@ -200,25 +202,25 @@ TEST(Soup, OutOfCoreWithTinyBudgetIsBitIdenticalToInCore) {
     auto a = build_soup(dir.file("grid.ply"), options_in(dir, 256u << 20));
     ASSERT_TRUE(a.ok()) << a.status().message();
     EXPECT_TRUE(a->in_core);
-    EXPECT_EQ(a->triangle_count, 300001u);
-    EXPECT_EQ(a->vertex_count, 501u * 301u);
+    EXPECT_EQ(a->triangle_count, triangles);
+    EXPECT_EQ(a->vertex_count, (kW + 1) * (kH + 1));
     EXPECT_EQ(a->layout, mesh.layout);
     EXPECT_TRUE(read_bytes(a->soup.path()) == expected);
 
-    SoupOptions tiny = options_in(dir, kMinSoupBudget);
+    SoupOptions tiny = options_in(dir, 1u << 20);  // the "1M-sized buffers"
     tiny.order = SoupOrder::by_triangle;
     auto b = build_soup(dir.file("grid.ply"), tiny);
     ASSERT_TRUE(b.ok()) << b.status().message();
     EXPECT_FALSE(b->in_core);
     EXPECT_TRUE(read_bytes(b->soup.path()) == expected);
-    EXPECT_GT(b->far_triangles, 290000u);
+    EXPECT_GT(b->far_triangles, triangles * 96 / 100);
     ASSERT_EQ(b->sorts.size(), 4u);  // three passes, then the order sort
     for (std::size_t i = 0; i < 4; ++i) {
       const SortStats& s = b->sorts[i];
       EXPECT_FALSE(s.in_core);
-      EXPECT_GT(s.runs, 50u);
+      EXPECT_GT(s.runs, 20u);
       EXPECT_GE(s.merge_passes, 2u);
-      EXPECT_EQ(s.records, i < 3 ? b->far_triangles : 300001u);
+      EXPECT_EQ(s.records, i < 3 ? b->far_triangles : triangles);
     }
     EXPECT_EQ(b->bounds, a->bounds);
   }
@@ -231,7 +233,7 @@ TEST(Soup, OutOfCoreWithTinyBudgetIsBitIdenticalToInCore) {
 TEST(Soup, EveryPathOrderAndThreadCountGivesTheSameRecords) {
   WorkDir dir;
   for (const bool shuffled : {true, false}) {
-    const GridMesh mesh = make_grid(120, 80, shuffled);
+    const GridMesh mesh = make_grid(100, 60, shuffled);
     write_mesh(dir.file("grid.ply"), mesh);
     const std::string expected =
         as_string(dereference_in_memory(mesh.vertices, mesh.triangles, mesh.layout));
@@ -261,7 +263,8 @@ TEST(Soup, EveryPathOrderAndThreadCountGivesTheSameRecords) {
             EXPECT_TRUE(soup == one_thread) << where;
             EXPECT_GE(r->seconds.total, r->seconds.sort);
             // In-order rows: the window pass takes every triangle of the grid (a quad spans
-            // 122 ids); only the degenerate one appended last reaches back to vertex 0.
+            // 102 ids, the grid 6161, the window 512 or 4096); only the degenerate one appended
+            // last reaches back to vertex 0.
             if (!r->in_core && !shuffled) {
               EXPECT_EQ(r->far_triangles, 1u) << where;
             }
