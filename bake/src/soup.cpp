@@ -257,7 +257,8 @@ class SoupBuilder {
     // half the budget, so the sort gets at least 1/4 of it minus the reader's file buffer.
     const std::uint64_t sort_budget =
         options_.memory_budget_bytes - vertex_array_bytes - 2 * io_ - kPlyFileBuffer;
-    // Triangle order for either SoupOrder (the split's order, unless polygons fanned out).
+    // Triangle order for either SoupOrder: the split's order already, so the sort only holds
+    // the records (spilling runs when they do not fit) until the vertex array is complete.
     auto sorter = RecordSorter::create(
         sizeof(TriangleRecord),
         sort_key_u32_at(offsetof(TriangleRecord, triangle), sizeof(TriangleRecord)),
@@ -290,9 +291,9 @@ class SoupBuilder {
     return {};
   }
 
-  // Out of core: the split writes the vertex file and the triangle file; the window pass
-  // (dereference.h) dereferences the triangles whose corners lie close together in the vertex
-  // file, the seed's three sorted passes the rest.
+  // Out of core: the split writes the vertex file and hands the triangles to the window pass
+  // (dereference.h), which dereferences those whose corners lie close together in the vertex
+  // file; the seed's three sorted passes take the rest.
   Status run_out_of_core() {
     // Budget: the window pass holds the window and the far triangles' sort (forming runs), the
     // passes two sorts (one merging, one forming runs); the window and each sort get a quarter
