@@ -1,5 +1,6 @@
-// Pointer dereferencing by sorted scans (seed 3.3, 4.2.2, Table 4.1): vertex ids replaced by
-// vertex records while the vertex file is read strictly front to back.
+// Pointer dereferencing (seed 3.3, 4.2.2, Table 4.1): vertex ids replaced by vertex records
+// while the vertex file is read strictly front to back, through a sliding window (the window
+// pass) or by sorted scans (the seed's three passes).
 #include "dereference.h"
 
 #include <algorithm>

@@ -1,5 +1,6 @@
-// The triangle soup stage (seed 3.3, 4.2, Table 4.1): split, then three sort + dereference
-// passes out of core, or one sorted gather from the in-memory vertices when they fit. See
+// The triangle soup stage (seed 3.3, 4.2, Table 4.1): split with the window pass and, for the
+// far triangles, three sort + dereference passes out of core, or one gather from the
+// in-memory vertices when they fit. See
 // octolod/bake/soup.h for the contract; this file decides the path and divides the budget.
 #include "octolod/bake/soup.h"
 
