@@ -345,16 +345,25 @@ class BucketSorter final : public RecordSorter {
     std::byte* records = stage_.get() + first * record_bytes_;
     auto reader = RecordReader::open(bucket.file.path(), record_bytes_, record_bytes_);
     if (!reader.ok()) return reader.status();
-    auto n = reader->read_into(std::span<std::byte>(records, capacity * record_bytes_));
-    if (!n.ok()) return n.status();
-    if (n.value() != bucket.records) {
+    if (reader->record_count() != bucket.records || bucket.records > capacity) {
       return io_error("bucket file '" + bucket.file.path().string() + "' holds " +
-                      std::to_string(n.value()) + " records, " +
+                      std::to_string(reader->record_count()) + " records, " +
                       std::to_string(bucket.records) + " were written");
     }
-    stats_.bytes_read += n.value() * record_bytes_;
+    // Read a block at a time, each block's keys computed while it is in the cache.
+    const std::size_t count = static_cast<std::size_t>(bucket.records);
+    for (std::size_t done = 0; done < count;) {
+      const std::size_t want = std::min(sizes_.block_records, count - done);
+      auto n = reader->read_into(
+          std::span<std::byte>(records + done * record_bytes_, want * record_bytes_));
+      if (!n.ok()) return n.status();
+      key_(std::span<const std::byte>(records + done * record_bytes_, n.value() * record_bytes_),
+           std::span<std::uint64_t>(keys_.get() + first + done, n.value()));
+      done += n.value();
+    }
+    stats_.bytes_read += count * record_bytes_;
     bucket.file.remove();
-    return sort_in_place(records, n.value(), first, /*keys_known=*/false);
+    return sort_in_place(records, count, first, /*keys_known=*/true);
   }
 
   // Sorts `count` records using the sort arrays from entry `first` on (the keys there already
