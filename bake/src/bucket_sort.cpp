@@ -199,13 +199,21 @@ class BucketSorter final : public RecordSorter {
     return bits == 0 ? 0 : static_cast<std::size_t>((key >> shift) & ((std::uint64_t{1} << bits) - 1));
   }
 
-  // Appends `count` records with their `keys` to the open level's bucket files: consecutive
-  // records of one bucket go in one call.
+  // Appends `count` records with their `keys` to the open level's bucket files. The runs of
+  // consecutive records of one bucket are gathered per bucket first: a bucket with at least a
+  // buffer's worth is written straight from `records` (writev), a smaller share is buffered.
   Status distribute(const std::byte* records, std::size_t count, const std::uint64_t* keys) {
+    runs_.resize(writers_.size());
     for (std::size_t i = 0; i < count;) {
       const std::size_t b = bucket_of(keys[i], shift_, bits_);
       std::size_t j = i + 1;
       while (j < count && bucket_of(keys[j], shift_, bits_) == b) ++j;
+      runs_[b].emplace_back(records + i * record_bytes_, (j - i) * record_bytes_);
+      i = j;
+    }
+    for (std::size_t b = 0; b < runs_.size(); ++b) {
+      std::vector<std::span<const std::byte>>& runs = runs_[b];
+      if (runs.empty()) continue;
       if (!writers_[b]) {
         files_[b] = make_temp_file(options_.work_dir, "bucket");
         auto writer = RecordWriter::create(files_[b].path(), record_bytes_, sizes_.writer_bytes);
@@ -213,9 +221,16 @@ class BucketSorter final : public RecordSorter {
         writers_[b].emplace(std::move(writer).value());
         ++stats_.runs;
       }
-      OCTOLOD_RETURN_IF_ERROR(writers_[b]->append(records + i * record_bytes_, j - i));
-      stats_.bytes_written += (j - i) * record_bytes_;
-      i = j;
+      std::size_t bytes = 0;
+      for (const auto& run : runs) bytes += run.size();
+      if (bytes >= sizes_.writer_bytes) {
+        OCTOLOD_RETURN_IF_ERROR(writers_[b]->append_runs(runs));
+      } else {
+        for (const auto& run : runs)
+          OCTOLOD_RETURN_IF_ERROR(writers_[b]->append(run.data(), run.size() / record_bytes_));
+      }
+      stats_.bytes_written += bytes;
+      runs.clear();
     }
     return {};
   }
@@ -429,6 +444,7 @@ class BucketSorter final : public RecordSorter {
   std::uint32_t depth_ = 0;
 
   std::vector<Level> levels_;  // distributions with buckets still to take, outermost first
+  std::vector<std::vector<std::span<const std::byte>>> runs_;  // distribute()'s, per bucket
 
   // The bucket being handed out, in half current_half_ of the stage (0 when it takes all).
   Sorted current_;

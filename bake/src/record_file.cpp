@@ -4,6 +4,7 @@
 
 #include <fcntl.h>
 #include <sys/stat.h>
+#include <sys/uio.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -13,6 +14,7 @@
 #include <cstring>
 #include <string>
 #include <utility>
+#include <vector>
 
 namespace octolod::bake {
 namespace {
@@ -113,6 +115,45 @@ Status RecordWriter::flush() {
     done += static_cast<std::size_t>(written);
   }
   used_ = 0;
+  return {};
+}
+
+Status RecordWriter::append_runs(std::span<const std::span<const std::byte>> runs) {
+  assert(fd_ >= 0 && "RecordWriter used after finish()");
+  OCTOLOD_RETURN_IF_ERROR(flush());
+  constexpr std::size_t kMaxIov = 1024;  // IOV_MAX on Linux
+  std::vector<iovec> iov;
+  iov.reserve(std::min(runs.size(), kMaxIov));
+  for (std::size_t first = 0; first < runs.size(); first += kMaxIov) {
+    iov.clear();
+    std::size_t bytes = 0;
+    for (std::size_t i = first; i < std::min(runs.size(), first + kMaxIov); ++i) {
+      assert(runs[i].size() % record_bytes_ == 0 && "RecordWriter::append_runs: partial record");
+      iov.push_back(iovec{const_cast<std::byte*>(runs[i].data()), runs[i].size()});
+      bytes += runs[i].size();
+    }
+    records_ += bytes / record_bytes_;
+    // Until every byte is out: a short write leaves the rest of its iovec and the later ones.
+    std::size_t next = 0;
+    while (bytes > 0) {
+      ssize_t written = -1;
+      if (!fault_fires(kWriteFault, bytes))
+        written = ::writev(fd_, iov.data() + next, static_cast<int>(iov.size() - next));
+      if (written < 0) {
+        if (errno == EINTR) continue;
+        return os_error("cannot write", path_, errno);
+      }
+      bytes -= static_cast<std::size_t>(written);
+      for (auto left = static_cast<std::size_t>(written); left > 0;) {
+        const std::size_t take = std::min(left, iov[next].iov_len);
+        iov[next].iov_base = static_cast<std::byte*>(iov[next].iov_base) + take;
+        iov[next].iov_len -= take;
+        left -= take;
+        if (iov[next].iov_len == 0) ++next;
+      }
+      while (next < iov.size() && iov[next].iov_len == 0) ++next;
+    }
+  }
   return {};
 }
 

@@ -31,6 +31,9 @@ class RecordWriter {
 
   // Copies `count` records.
   Status append(const std::byte* records, std::size_t count);
+  // Writes the runs of whole records `runs` (in order) straight from the caller's memory with
+  // writev(2), after what is buffered: no copy through the buffer.
+  Status append_runs(std::span<const std::span<const std::byte>> runs);
   // Room for between 1 and `max_records` records in the buffer (flushing first when it is
   // full); fill a prefix and commit() it. Valid until the next call on the writer.
   Result<std::span<std::byte>> reserve(std::size_t max_records);
