@@ -94,9 +94,8 @@ Result<OctreeBudget> divide_octree_budget(const BakeOptions& options, VertexLayo
 }
 
 // The soup's way into the octree sort (SoupOptions::sink). When the soup stage leaves room
-// for a sorter beside it (its out-of-core path keeps about half the budget free in its last
-// pass), the records go straight into that sorter's run buffer and the soup never touches the
-// disk. Otherwise (the in-core path holds the whole budget) they go to a soup file, read into a
+// for a sorter beside it (its out-of-core path keeps about half the budget free), the records
+// go straight into that sorter's stage and the soup is never written as a file. Otherwise (the in-core path holds the whole budget) they go to a soup file, read into a
 // sorter with the full sort budget once the soup stage has freed its memory.
 class OctreeInput {
  public:
@@ -132,7 +131,7 @@ class OctreeInput {
     return writer_->append(records.data(), records.size() / soup_record_bytes(layout_));
   }
 
-  // After the soup stage: the sorter, holding every record and finished (run formation done).
+  // After the soup stage: the sorter, holding every record and finished (input distributed).
   // `progress(done)` counts the records read back from the soup file, if one was written.
   Result<RecordSorter*> finish(const std::function<void(std::uint64_t)>& progress) {
     if (writer_) OCTOLOD_RETURN_IF_ERROR(read_back(progress));
@@ -214,9 +213,9 @@ struct OctreeResult {
   LodTreeStats lod_stats;
   SortStats sort;
   bool soup_streamed = false; // the soup went straight into the sorter, no soup file
-  double sort_seconds = 0;    // run formation left after the soup stage (reading the soup file
-                              // back when one was written, the last run)
-  double stream_seconds = 0;  // merge + tree decision, node work overlapping
+  double sort_seconds = 0;    // the sort's input left after the soup stage (reading the soup
+                              // file back when one was written, the last distribution)
+  double stream_seconds = 0;  // buckets read and sorted + tree decision, node work overlapping
   double lod_seconds = 0;     // the node work left when the stream ended (wall)
 };
 
@@ -250,7 +249,7 @@ Result<OctreeResult> build_octree(const BakeOptions& options, const SoupResult& 
     if (options.progress) options.progress(stage, done, soup.triangle_count);
   };
 
-  // sort: what run formation is left
+  // sort: what input distribution is left
   auto start = Clock::now();
   auto finished = input.finish([&](std::uint64_t done) { progress("sort", done); });
   if (!finished.ok()) return finished.status();

@@ -243,9 +243,9 @@ class BucketSorter final : public RecordSorter {
     writers_.resize(std::size_t{1} << bits_);
     files_.clear();
     files_.resize(std::size_t{1} << bits_);
-    depth_ = static_cast<std::uint32_t>(levels_.size() + 1);
+    const auto depth = static_cast<std::uint32_t>(levels_.size() + 1);
     stats_.fan_in = std::max(stats_.fan_in, static_cast<std::uint32_t>(writers_.size()));
-    stats_.merge_passes = std::max(stats_.merge_passes, depth_);
+    stats_.merge_passes = std::max(stats_.merge_passes, depth);
   }
 
   // The filled part of the stage must go to the bucket files before more records fit. With
@@ -441,7 +441,6 @@ class BucketSorter final : public RecordSorter {
   std::vector<TempFile> files_;
   unsigned bits_ = 0;   // its bucket index bits
   unsigned shift_ = 0;  // bits below them
-  std::uint32_t depth_ = 0;
 
   std::vector<Level> levels_;  // distributions with buckets still to take, outermost first
   std::vector<std::vector<std::span<const std::byte>>> runs_;  // distribute()'s, per bucket
