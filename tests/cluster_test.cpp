@@ -104,23 +104,25 @@ NodeMesh plane_grid(int cells, VertexLayout layout = {true, true, true}) {
 //   A roof whose ridge (x = 0, z = 1) lies far above the mesh: two strips, x in [-2,-1.6] and
 //   [1.6,2], y in [0,1], on the planes z = 1 - |x|/2 (so z in [0, 0.2]); 4 x 4 quads each, so
 //   each strip has 3 x 3 interior vertices. The quadric optimum of the whole is on the ridge.
+//   roof(4, 8): the + strip has 8 columns of quads (x in [1.6, 2.4], z down to -0.2).
 //        ridge (outside the cell)
 //          /\ .
 //         /  \ .
 //   ___ /      \ ___ .  <- only these outer strips are meshed
-NodeMesh roof() {
+NodeMesh roof(int columns_minus = 4, int columns_plus = 4) {
   NodeMesh mesh;
   for (const float side : {-1.0f, 1.0f}) {
+    const int columns = side < 0.0f ? columns_minus : columns_plus;
     const auto base = static_cast<std::uint32_t>(mesh.vertex_count());
     for (int j = 0; j <= 4; ++j) {
-      for (int i = 0; i <= 4; ++i) {
+      for (int i = 0; i <= columns; ++i) {
         const float x = side * (1.6f + 0.1f * static_cast<float>(i));
         mesh.vertices.insert(mesh.vertices.end(), {x, 0.25f * static_cast<float>(j), 1.0f - 0.5f * std::fabs(x)});
       }
     }
-    const auto id = [base](int i, int j) { return base + static_cast<std::uint32_t>(j * 5 + i); };
+    const auto id = [base, columns](int i, int j) { return base + static_cast<std::uint32_t>(j * (columns + 1) + i); };
     for (int j = 0; j < 4; ++j)
-      for (int i = 0; i < 4; ++i)
+      for (int i = 0; i < columns; ++i)
         mesh.indices.insert(mesh.indices.end(), {id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j), id(i + 1, j + 1), id(i, j + 1)});
   }
   return mesh;
@@ -542,6 +544,69 @@ TEST(SimplifyTest, GridRepresentativeIsClampedIntoItsCell) {
   EXPECT_EQ(odd_edges(result.mesh), boundary);
 }
 
+TEST(SimplifyTest, GridRepresentativeBeatsItsClusterMeanAndVertices) {
+  // An asymmetric roof (the + strip twice as wide) in one cell: the quadric optimum nearest the
+  // interior vertices' mean is on the ridge line x = 0, z = 1, above the cell. Pulled towards the
+  // mean (x = 0.86) it meets the top of the cell at x ~ 0.7, where its error is lower than
+  // straight below the ridge, where a per-axis clamp would put it (1.38 vs 1.54 times the left
+  // strip's weight). Whichever point is chosen, the cluster's mean and its own vertices are
+  // candidates too: none has a lower quadric error.
+  const NodeMesh mesh = roof(4, 8);
+  const Bounds cell = mesh.bounds();
+  const SimplifyResult result = simplify(mesh, cell, grid_resolution(1));
+  std::set<PositionKey> locked;
+  for (const EdgeKey& edge : odd_edges(mesh)) locked.insert(edge.begin(), edge.end());
+  // the cluster's quadric as the grid builds it: every triangle's plane quadric times its area,
+  // once per corner in the cluster (not locked)
+  double quadric[quadric_doubles(3)] = {};
+  std::array<double, 3> mean{};
+  std::vector<std::array<double, 3>> interior;
+  for (std::uint32_t v = 0; v < mesh.vertex_count(); ++v) {
+    if (locked.count(position_key(mesh, v))) continue;
+    const float* p = &mesh.vertices[v * 3];
+    interior.push_back({p[0], p[1], p[2]});
+    for (std::size_t i = 0; i < 3; ++i) mean[i] += p[i];
+  }
+  ASSERT_EQ(interior.size(), 30u);
+  for (double& m : mean) m /= static_cast<double>(interior.size());
+  for (std::size_t t = 0; t < mesh.triangle_count(); ++t) {
+    double corners[3][3];
+    int in_cluster = 0;
+    for (std::size_t k = 0; k < 3; ++k) {
+      const std::uint32_t v = mesh.indices[3 * t + k];
+      in_cluster += locked.count(position_key(mesh, v)) == 0;
+      for (std::size_t i = 0; i < 3; ++i) corners[k][i] = mesh.vertices[v * 3 + i];
+    }
+    if (in_cluster == 0) continue;
+    const double e1[3] = {corners[1][0] - corners[0][0], corners[1][1] - corners[0][1], corners[1][2] - corners[0][2]};
+    const double e2[3] = {corners[2][0] - corners[0][0], corners[2][1] - corners[0][1], corners[2][2] - corners[0][2]};
+    const double normal[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
+    const double area = 0.5 * std::sqrt(normal[0] * normal[0] + normal[1] * normal[1] + normal[2] * normal[2]);
+    double q[quadric_doubles(3)];
+    plane_quadric(normal, corners[0], area * in_cluster, q);
+    add_quadric(3, quadric, q);
+  }
+  std::set<PositionKey> representatives;
+  std::array<double, 3> rep{};
+  for (std::uint32_t v = 0; v < result.mesh.vertex_count(); ++v) {
+    if (locked.count(position_key(result.mesh, v))) continue;
+    representatives.insert(position_key(result.mesh, v));
+    const float* p = &result.mesh.vertices[v * 3];
+    rep = {p[0], p[1], p[2]};
+  }
+  ASSERT_EQ(representatives.size(), 1u);
+  const float rep_float[3] = {static_cast<float>(rep[0]), static_cast<float>(rep[1]), static_cast<float>(rep[2])};
+  EXPECT_TRUE(cell.contains(rep_float));
+  EXPECT_GT(rep[0], 0.5) << "pulled towards the mean, not clamped straight below the ridge";
+  EXPECT_NEAR(rep[2], cell.max[2], 1e-6);
+  const double error = evaluate_quadric(3, quadric, rep.data());
+  const double tolerance = 1e-6 * error;  // the representative is rounded to float
+  EXPECT_LE(error, evaluate_quadric(3, quadric, mean.data()) + tolerance);
+  for (const std::array<double, 3>& v : interior) EXPECT_LE(error, evaluate_quadric(3, quadric, v.data()) + tolerance);
+  const std::array<double, 3> below_ridge{0.0, rep[1], rep[2]};
+  EXPECT_LT(error, evaluate_quadric(3, quadric, below_ridge.data()));
+}
+
 TEST(SimplifyTest, GridFinerThanTheVerticesKeepsTheInput) {
   // every vertex alone in its cell: each one-vertex cluster keeps its vertex (position bit-identical,
   // attributes up to renormalization), every triangle survives. Normals and colours only: the
@@ -710,9 +775,13 @@ TEST(LodTest, EveryLodErrorBoundsTheMeasuredHausdorff) {
       worst_ratio = std::max(worst_ratio, lod.error / measured);
       if (k == 1) first_ratio = lod.error / measured;
     }
-    // One step's bound is within 4x of the measured distance; along the chain the steps' bounds
-    // add up (triangle inequality) while the measured distances do not, hence 8x at depth.
-    EXPECT_LE(first_ratio, 4.0) << "one step's bound is too loose";
+    // One step's bound is within 6x of the measured distance (4.7-5.0x here): it follows the
+    // input triangles' offsets across the output triangles, about a cell, while the measured
+    // distance is what is left across the surface (smaller since the representatives are chosen
+    // among their clusters' own vertices too: the bound stayed, the distance dropped from ~4x
+    // below it). Along the chain the steps' bounds add up (triangle inequality) while the
+    // measured distances do not, hence 8x at depth.
+    EXPECT_LE(first_ratio, 6.0) << "one step's bound is too loose";
     EXPECT_LE(worst_ratio, 8.0) << "the bound is too loose to drive the runtime's LOD choice";
   }
 }

@@ -31,7 +31,9 @@ struct Clustering {
   std::vector<std::uint32_t> of_vertex;  // cluster of each vertex; clusters in output order
   std::uint32_t count = 0;
   // Per cluster: 1 when its vertices are kept verbatim (locked boundary: every vertex record its
-  // own wedge, bit-identical). Otherwise its position is clamped into box (local coordinates).
+  // own wedge, bit-identical). Otherwise its position lies in box (local coordinates): the
+  // quadric minimizer pulled into it towards the cluster's mean, or the cluster's vertex with the
+  // least quadric error when that is lower.
   std::vector<std::uint8_t> locked;
   std::vector<ClampBox> box;
 };

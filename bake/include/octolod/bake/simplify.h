@@ -31,7 +31,7 @@ namespace octolod::bake {
 
 enum class ClusterMethod {
   // Lindstrom-style: a uniform grid of cubic cells inside the node, one quadric-optimal
-  // representative per cell (clamped into its cell), locked boundary vertices are their own
+  // representative per cell (inside its cell), locked boundary vertices are their own
   // clusters, triangles whose three corners land in three distinct clusters survive. The default.
   grid,
   // The seed's operator (Bade et al. 2006, 3.5): one representative for the whole node from the
@@ -70,7 +70,9 @@ struct SimplifyResult {
 // fixed); corners on the other side of a uv/normal/colour seam keep their own value, so seams are
 // never averaged across. Positions come from the cluster's position-only quadric (the geometric
 // error is what the runtime's screen-space error uses), the minimizer nearest the cluster's mean
-// when the quadric is singular (flat or linear clusters), clamped into the cluster's cell.
+// when the quadric is singular (flat or linear clusters), pulled into the cluster's cell along
+// the segment from the cluster's mean when it falls outside; one of the cluster's own vertices
+// instead when its quadric error is lower than that point's.
 // Errors: bad_input when the mesh is inconsistent (vertex array not a multiple of the layout,
 // index out of range, non-finite position); usage when the options are meaningless.
 Result<SimplifyResult> simplify_node(const NodeMesh& input, const Bounds& cell,
