@@ -176,6 +176,8 @@ TEST_F(BakeTest, LeavesHoldExactlyTheInputTrianglesInAConsistentTree) {
   BakeOptions o = options("out");
   o.max_tris = 700;
   o.max_depth = 2;  // shallow enough that some leaves at max depth exceed max_tris
+  // Its largest leaf (3009 triangles) needs more than 16 MiB's max_depth_leaf_triangles.
+  o.memory_budget_bytes = 24 << 20;
   auto baked = bake(o);
   ASSERT_TRUE(baked.ok()) << baked.status().message();
   auto manifest = read_manifest(path("out") / "manifest.json");
@@ -241,6 +243,59 @@ TEST_F(BakeTest, LeavesHoldExactlyTheInputTrianglesInAConsistentTree) {
   std::sort(found.begin(), found.end());
   EXPECT_TRUE(found == expected);
   expect_no_temp_files();
+}
+
+// The smallest budget whose max_depth_leaf_triangles reaches `triangles`.
+std::uint64_t budget_for_leaf(std::uint64_t triangles, VertexLayout layout) {
+  std::uint64_t low = kMinBakeBudget, high = std::uint64_t{1} << 40;
+  while (low < high) {
+    const std::uint64_t mid = low + (high - low) / 2;
+    if (max_depth_leaf_triangles(mid, layout) >= triangles) high = mid;
+    else low = mid + 1;
+  }
+  return low;
+}
+
+// max_depth 2 leaves the 60K rock's largest leaf at max depth with thousands of triangles: a
+// budget whose cap is one triangle short refuses the bake, naming that leaf (the first such in
+// key order), on the records path and on the in-memory octree alike, publishes nothing and
+// keeps the earlier bake; the budget whose cap it just reaches bakes it.
+TEST_F(BakeTest, LeafAtMaxDepthOverTheBudgetsCapIsRefusedAndKeepsTheEarlierBake) {
+  BakeOptions o = options("out");
+  o.max_tris = 700;
+  o.max_depth = 2;
+  o.lods = false;
+  o.memory_budget_bytes = 64 << 20;
+  auto earlier = bake(o);
+  ASSERT_TRUE(earlier.ok()) << earlier.status().message();
+  const std::map<std::string, std::string> before = tree_files(path("out"));
+  const NodeInfo* largest = nullptr;
+  for (const NodeInfo& n : earlier->manifest.nodes)
+    if (n.is_leaf() && (!largest || n.source_triangles > largest->source_triangles)) largest = &n;
+  ASSERT_TRUE(largest && largest->depth == 2 && largest->source_triangles > o.max_tris + 1);
+  const std::uint64_t fits = budget_for_leaf(largest->source_triangles, earlier->manifest.layout);
+
+  o.memory_budget_bytes = fits - 1;
+  for (bool in_memory : {true, false}) {
+    o.in_memory_octree = in_memory;
+    auto refused = bake(o);
+    ASSERT_FALSE(refused.ok());
+    EXPECT_EQ(refused.status().code(), ErrorCode::usage);
+    const std::string& message = refused.status().message();
+    EXPECT_NE(message.find("octree cell " + largest->path + " at --max-depth 2 holds more than " +
+                           std::to_string(largest->source_triangles - 1) + " triangles"),
+              std::string::npos)
+        << message;
+    EXPECT_NE(message.find("raise --max-depth"), std::string::npos) << message;
+    EXPECT_TRUE(tree_files(path("out")) == before);
+    expect_no_temp_files();
+  }
+
+  o.memory_budget_bytes = fits;
+  auto baked = bake(o);
+  ASSERT_TRUE(baked.ok()) << baked.status().message();
+  EXPECT_EQ(manifest_to_json(without_run_details(baked->manifest)),
+            manifest_to_json(without_run_details(earlier->manifest)));
 }
 
 TEST_F(BakeTest, WithoutLodsLeavesHoldOnlyTheirOriginalTrianglesWithTightBounds) {

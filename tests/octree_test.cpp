@@ -4,6 +4,7 @@
 
 #include <cstring>
 #include <map>
+#include <string>
 #include <vector>
 
 #include "morton.h"
@@ -149,6 +150,66 @@ TEST(OctreeBuilder, LeavesAtMaxDepthKeepEverything) {
   EXPECT_EQ(t.nodes[2].triangles, 10u);
   EXPECT_EQ(t.leaves.at(2).size(), 10u);
   EXPECT_EQ(t.leaves.at(3), std::vector<std::uint64_t>{10});
+}
+
+// A leaf at max depth over its cap: the build ends in the push that brings the record past
+// the cap, with the cap's error for that cell, and the cell is never handed out. Records in
+// 1/2: 10 (max_tris 3, max_depth 2), then one in 1/3.
+TEST(OctreeBuilder, LeafAtMaxDepthOverTheCapIsRefusedWithItsCell) {
+  Stream s;
+  for (int i = 0; i < 10; ++i) s.add(012u);
+  s.add(013u);
+  for (std::uint64_t cap : {9u, 10u}) {
+    for (std::size_t batch : {1u, 4u, 100u}) {
+      std::vector<std::int32_t> handed_out;
+      std::vector<std::string> refused;
+      OctreeBuilder builder(
+          3, 2, 8, 0,
+          [&](std::int32_t node, std::vector<std::byte>&&) {
+            handed_out.push_back(node);
+            return Status{};
+          },
+          {cap, [&](const OctreeNode& node, std::uint64_t triangles) {
+             refused.push_back(node.path() + " depth " + std::to_string(node.depth) + " cap " +
+                               std::to_string(triangles));
+             return usage_error("too large");
+           }});
+      Status st;
+      for (std::size_t i = 0; i < s.keys.size() && st.ok(); i += batch) {
+        const std::size_t n = std::min(batch, s.keys.size() - i);
+        st = builder.push(std::span(s.records).subspan(i * 8, n * 8),
+                          std::span(s.keys).subspan(i, n));
+      }
+      if (cap == 10) {  // exactly at the cap: the tree of LeavesAtMaxDepthKeepEverything
+        EXPECT_TRUE(st.ok() && builder.finish().ok());
+        EXPECT_TRUE(refused.empty());
+        EXPECT_EQ(handed_out, (std::vector<std::int32_t>{2, 3}));
+        continue;
+      }
+      EXPECT_EQ(st.code(), ErrorCode::usage) << "batch " << batch;
+      EXPECT_EQ(refused, std::vector<std::string>{"1/2 depth 2 cap 9"}) << "batch " << batch;
+      EXPECT_TRUE(handed_out.empty());
+    }
+  }
+}
+
+// max_tris + 1 triangles at max depth always pass (a split's last child may take them all):
+// a lower cap is raised to that.
+TEST(OctreeBuilder, LeafCapIsNeverBelowMaxTrisPlusOne) {
+  Stream s;
+  for (int i = 0; i < 5; ++i) s.add(010u);  // all in 1/0: root and 1 split at 4 records
+  std::vector<std::string> refused;
+  OctreeBuilder builder(
+      3, 2, 8, 0, [](std::int32_t, std::vector<std::byte>&&) { return Status{}; },
+      {2, [&](const OctreeNode& node, std::uint64_t triangles) {
+         refused.push_back(node.path() + " cap " + std::to_string(triangles));
+         return usage_error("too large");
+       }});
+  EXPECT_TRUE(builder.push(std::span(s.records).first(4 * 8), std::span(s.keys).first(4)).ok());
+  EXPECT_TRUE(refused.empty());
+  EXPECT_EQ(builder.push(std::span(s.records).subspan(4 * 8), std::span(s.keys).subspan(4)).code(),
+            ErrorCode::usage);
+  EXPECT_EQ(refused, std::vector<std::string>{"1/0 cap 4"});
 }
 
 // Equal keys may arrive in any order (the soup's order depends on its path): a leaf hands

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstdio>
 #include <cstring>
 #include <optional>
 #include <string>
@@ -91,6 +92,46 @@ Result<OctreeBudget> divide_octree_budget(const BakeOptions& options, VertexLayo
   }
   b.sort_bytes = options.memory_budget_bytes - reserve;
   return b;
+}
+
+std::string mib(std::uint64_t bytes) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.1f MiB", static_cast<double>(bytes) / (1 << 20));
+  return text;
+}
+
+// What a leaf costs in the LOD stage (lod_tree.h), per triangle, in soup records: the records,
+// the indexed NodeMesh, the simplifier's per-vertex quadrics and the LOD chain. Measured as the
+// slope of peak RSS (/usr/bin/time -v) between one leaf of 100K and one of 400K triangles
+// (--max-depth 0, --memory 16M): rocks 4.4 (every attribute, 0.5 vertices per triangle) to 9.2
+// (positions only) records per triangle, a city's boxes 13.6 (every attribute, 2 vertices per
+// triangle). The worst, rounded up: the cap must hold for any input.
+constexpr std::uint64_t kLeafCostInRecords = 14;
+// A leaf at max_depth, which cannot split, may cost up to 1 / kMaxDepthLeafShare of the budget
+// in the LOD stage. That share is not taken from the others (the octree sort keeps its own, and
+// with it the in-memory octree), so a bake with leaves near the cap peaks up to that much above
+// one without.
+constexpr std::uint64_t kMaxDepthLeafShare = 4;
+
+// The most triangles a leaf at max_depth may hold (max_depth_leaf_triangles), and the error that
+// refuses a larger one: it names the cell, the cap, what the cap's triangles cost and what to
+// change.
+MaxDepthLeafCap max_depth_leaf_cap(const BakeOptions& options, VertexLayout layout) {
+  const std::uint64_t record_bytes = soup_record_bytes(layout);
+  MaxDepthLeafCap cap;
+  cap.triangles = max_depth_leaf_triangles(options.memory_budget_bytes, layout);
+  cap.refuse = [budget = options.memory_budget_bytes, record_bytes](const OctreeNode& node,
+                                                                   std::uint64_t triangles) {
+    const std::string cell =
+        node.depth == 0 ? "the octree's root cell" : "octree cell " + node.path();
+    return usage_error(cell + " at --max-depth " + std::to_string(node.depth) +
+                       " holds more than " + std::to_string(triangles) + " triangles (" +
+                       mib(triangles * record_bytes) + " of soup records, about " +
+                       mib(triangles * record_bytes * kLeafCostInRecords) +
+                       " to build its LODs), more than a leaf at max depth may take under " +
+                       "--memory " + mib(budget) + "; raise --max-depth (or --memory)");
+  };
+  return cap;
 }
 
 // The soup's way into the octree sort (SoupOptions::sink). When the soup stage leaves room
@@ -267,7 +308,8 @@ Result<OctreeResult> build_octree(const BakeOptions& options, const SoupResult& 
                         [&](std::int32_t node, std::vector<std::byte>&& records) {
                           if (cleanup_signal_received()) return interrupted();
                           return lod_tree.add_leaf(node, builder_ptr->nodes(), std::move(records));
-                        });
+                        },
+                        max_depth_leaf_cap(options, soup.layout));
   builder_ptr = &builder;
   std::uint64_t done = 0;
   Status streamed;
@@ -397,7 +439,8 @@ Result<OctreeResult> build_octree_from_mesh(const BakeOptions& options, unsigned
         }
         next_leaf += count;
         return lod_tree.add_leaf(node, nodes, std::move(records));
-      });
+      },
+      max_depth_leaf_cap(options, mesh.layout));
   builder_ptr = &builder;
   for (std::size_t first = 0; first < n; first += kMeshKeyBlock) {
     const std::size_t m = std::min(kMeshKeyBlock, n - first);
@@ -596,6 +639,11 @@ std::optional<ClusterMethod> parse_method(std::string_view name) {
   for (ClusterMethod m : {ClusterMethod::grid, ClusterMethod::bade2006})
     if (method_name(m) == name) return m;
   return std::nullopt;
+}
+
+std::uint64_t max_depth_leaf_triangles(std::uint64_t memory_budget_bytes, VertexLayout layout) {
+  return memory_budget_bytes / kMaxDepthLeafShare /
+         (kLeafCostInRecords * soup_record_bytes(layout));
 }
 
 Result<BakeReport> bake(const BakeOptions& options) {

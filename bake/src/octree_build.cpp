@@ -21,12 +21,17 @@ std::string OctreeNode::path() const {
 }
 
 OctreeBuilder::OctreeBuilder(std::uint32_t max_tris, std::uint32_t max_depth,
-                             std::size_t record_bytes, std::size_t tie_offset, LeafFn on_leaf)
+                             std::size_t record_bytes, std::size_t tie_offset, LeafFn on_leaf,
+                             MaxDepthLeafCap cap)
     : max_tris_(max_tris),
       max_depth_(max_depth),
       record_bytes_(record_bytes),
       tie_offset_(tie_offset),
-      on_leaf_(std::move(on_leaf)) {
+      on_leaf_(std::move(on_leaf)),
+      cap_(std::move(cap)) {
+  cap_.triangles = std::max<std::uint64_t>(cap_.triangles, std::uint64_t{max_tris} + 1);
+  assert((cap_.refuse || cap_.triangles == std::numeric_limits<std::uint64_t>::max()) &&
+         "a MaxDepthLeafCap with a limit needs its refuse function");
   assert(max_depth <= kMaxOctreeDepth && "max_depth above kMaxOctreeDepth: keys would overflow");
   assert(max_tris >= 1 && "max_tris must be at least 1");
   assert((record_bytes == 0 || tie_offset + 4 <= record_bytes) && "tie_offset outside the record");
@@ -44,11 +49,15 @@ Status OctreeBuilder::push(std::span<const std::byte> records,
       continue;
     }
     // The run of keys in the candidate's cell (the stream is sorted), appended at once, up to
-    // the record that makes it split (so the buffer never holds more than max_tris + 1).
+    // the record that makes it split (so the buffer never holds more than max_tris + 1). At
+    // max_depth the whole run, unless it takes the candidate over the cap: then nothing more
+    // is buffered.
     std::size_t limit = keys.size();
     if (c.depth < max_depth_) limit = std::min(limit, i + (max_tris_ + 1 - buffer_keys_.size()));
     std::size_t j = i;
     while (j < limit && prefix_of(keys[j], c.depth) == c.prefix) ++j;
+    if (c.depth == max_depth_ && buffer_keys_.size() + (j - i) > cap_.triangles)
+      return cap_.refuse(c, cap_.triangles);
     buffer_.insert(buffer_.end(), records.data() + i * record_bytes_,
                    records.data() + j * record_bytes_);
     buffer_keys_.insert(buffer_keys_.end(), keys.begin() + static_cast<std::ptrdiff_t>(i),

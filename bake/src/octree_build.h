@@ -9,8 +9,10 @@
 // splits: its buffer, sorted, is one run per child, every child but the last is complete and
 // settled at once (split again or handed out as a leaf), the last becomes the candidate. When
 // the stream leaves the candidate's key range it is a leaf and its records go to the caller.
-// Memory: one candidate buffer of at most max_tris + 1 records (a leaf at max_depth is
-// unbounded: it cannot split, so it keeps everything it gets) and a copy of a settled leaf.
+// Memory: one candidate buffer of at most max_tris + 1 records and a copy of a settled leaf.
+// A candidate at max_depth cannot split, so it would keep everything its cell gets: a
+// MaxDepthLeafCap bounds it, the build ends with the cap's error as soon as the stream brings
+// it more than the cap (its buffer never holds more than the cap's records).
 //
 // Rules (seed 3.4): a node splits while it holds more than max_tris triangles and its depth is
 // below max_depth; each triangle belongs to exactly one leaf, the one whose cell holds its
@@ -21,6 +23,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <functional>
+#include <limits>
 #include <span>
 #include <string>
 #include <vector>
@@ -44,6 +47,16 @@ struct OctreeNode {
 // Receives a finished leaf: its node index and its records in leaf order (ownership passes).
 using LeafFn = std::function<Status(std::int32_t node, std::vector<std::byte>&& records)>;
 
+// The most triangles a leaf at max_depth may hold; at least max_tris + 1 always pass (a split's
+// child at max_depth may hold all of its parent's records). When the stream brings a candidate
+// at max_depth more, refuse(node, cap) is called with that candidate (its depth and prefix
+// set, nothing beyond the cap buffered) and the cap in effect; the error it returns ends the
+// build.
+struct MaxDepthLeafCap {
+  std::uint64_t triangles = std::numeric_limits<std::uint64_t>::max();
+  std::function<Status(const OctreeNode& node, std::uint64_t cap)> refuse;
+};
+
 class OctreeBuilder {
  public:
   // max_depth <= kMaxOctreeDepth (morton.h), max_tris >= 1; keys pushed must have max_depth
@@ -52,9 +65,10 @@ class OctreeBuilder {
   // records, and a leaf's triangles are the next OctreeNode::triangles keys of the stream.
   // The tree (nodes(), leaves and their order) depends on the keys only. Leaf order: by key,
   // equal keys by the u32 at byte `tie_offset` of the record (the triangle id), so a leaf's
-  // records do not depend on the order equal keys arrived in.
+  // records do not depend on the order equal keys arrived in. `cap` only refuses, it never
+  // changes the tree; its default lets leaves at max_depth grow without bound.
   OctreeBuilder(std::uint32_t max_tris, std::uint32_t max_depth, std::size_t record_bytes,
-                std::size_t tie_offset, LeafFn on_leaf);
+                std::size_t tie_offset, LeafFn on_leaf, MaxDepthLeafCap cap = {});
 
   // The next records of the sorted stream and their keys (keys.size() records, non-decreasing
   // keys across all calls).
@@ -84,6 +98,7 @@ class OctreeBuilder {
   std::size_t record_bytes_;
   std::size_t tie_offset_;
   LeafFn on_leaf_;
+  MaxDepthLeafCap cap_;  // cap_.triangles >= max_tris_ + 1
   std::vector<OctreeNode> nodes_;
   std::vector<std::int32_t> open_;  // split nodes on the current key's path, root first
   std::int32_t candidate_ = -1;     // the node whose records are being buffered

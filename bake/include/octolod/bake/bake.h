@@ -29,7 +29,9 @@
 // Memory: the soup stage, then the octree sort, the leaf queue, the node work in flight and the
 // children's LODs kept for their parents share the budget; kept LODs beyond their share are
 // re-read from their files by the parent. Peak RSS is about the budget plus the program's
-// fixed footprint.
+// fixed footprint, plus up to a quarter of the budget while a leaf at max_depth larger than
+// usual is built; a leaf at max_depth too large for that quarter (max_depth_leaf_triangles)
+// fails the bake before its memory is spent.
 #pragma once
 
 #include <cstdint>
@@ -41,6 +43,7 @@
 #include "octolod/bake/simplify.h"
 #include "octolod/formats/manifest.h"
 #include "octolod/formats/status.h"
+#include "octolod/formats/vertex_layout.h"
 
 namespace octolod::bake {
 
@@ -57,8 +60,10 @@ struct BakeOptions {
   // more nodes, more files and a finer LOD cut; larger ones fewer files but coarser paging.
   // Memory: about (max_tris + 1) soup records per leaf in flight. At least 1.
   std::uint32_t max_tris = 2000;
-  // Deepest level (root = 0), at most 21. A leaf at max_depth keeps all its triangles, however
-  // many: raise it for dense models so no leaf outgrows the budget.
+  // Deepest level (root = 0), at most 21. A leaf at max_depth cannot split, so it keeps all
+  // its triangles; the bake fails (usage error naming the cell) as soon as one holds more than
+  // max_depth_leaf_triangles(memory_budget_bytes, layout) (and max_tris + 1), before it spends
+  // memory on it: raise max_depth (or the budget) for dense models.
   std::uint32_t max_depth = 10;
   // Cap on the bake's buffers together (soup stage, octree sort, leaf buffers); the peak RSS is
   // this plus the program's fixed footprint. Larger budgets mean fewer sorted runs and merges
@@ -98,6 +103,15 @@ std::optional<ClusterMethod> parse_method(std::string_view name);
 
 inline constexpr std::uint64_t kMinBakeBudget = std::uint64_t{1} << 20;
 
+// The most triangles a leaf at max_depth may hold under a budget of memory_budget_bytes with
+// vertices of `layout` (a leaf of max_tris + 1 is always allowed): a quarter of the budget at
+// about 14 soup records of memory per triangle (its records, indexed mesh, simplification
+// arrays and LOD chain, measured on leaves of up to 400K triangles). That quarter comes on top
+// of the rest of the bake's buffers: a bake with a leaf near the cap peaks up to a quarter of
+// the budget higher. Depends only on its arguments: the cap refuses a bake, never changes its
+// tree.
+std::uint64_t max_depth_leaf_triangles(std::uint64_t memory_budget_bytes, VertexLayout layout);
+
 struct BakeReport {
   Manifest manifest;             // as written to OUT_DIR/manifest.json
   std::uint64_t nodes = 0;
@@ -112,7 +126,8 @@ struct BakeReport {
 
 // Bakes options.input into options.output (see the top of this file). Errors: usage for bad
 // options (max_tris 0, max_depth > 21, budget below kMinBakeBudget or too small for max_tris,
-// an output that is a file or a non-empty foreign directory), the PLY reader's bad_input /
+// an output that is a file or a non-empty foreign directory, a leaf at max_depth over
+// max_depth_leaf_triangles: found during the octree stream), the PLY reader's bad_input /
 // unsupported / io naming the file, io for any refused write (out of space included) naming
 // the path. On error nothing is published and every temporary file is gone.
 Result<BakeReport> bake(const BakeOptions& options);
