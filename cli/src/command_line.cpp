@@ -40,12 +40,15 @@ void add_bake_command(CLI::App& app, CommandContext& context) {
       ->check(CLI::Range(1u, 1u << 30));
   command
       ->add_option("--max-depth", args->max_depth,
-                   "Deepest octree level (root = 0); leaves there keep all their triangles")
+                   "Deepest octree level (root = 0); leaves there keep all their triangles, "
+                   "and the bake stops (exit 1) when one holds more than a quarter of --memory "
+                   "can simplify: raise --max-depth or --memory")
       ->capture_default_str()
       ->check(CLI::Range(0u, 21u));
   command
       ->add_option("--memory", args->memory,
-                   "Memory budget for the whole bake: 16M, 64M, 1G (peak RSS ~ this + a few MB)")
+                   "Memory budget for the whole bake: 16M, 64M, 1G (peak RSS ~ this + a few MB; "
+                   "up to a quarter more per leaf at --max-depth larger than --max-tris)")
       ->capture_default_str();
   command->add_option("--work-dir", args->work_dir,
                       "Directory for temporary files (default: next to the output)");

@@ -29,9 +29,9 @@
 // Memory: the soup stage, then the octree sort, the leaf queue, the node work in flight and the
 // children's LODs kept for their parents share the budget; kept LODs beyond their share are
 // re-read from their files by the parent. Peak RSS is about the budget plus the program's
-// fixed footprint, plus up to a quarter of the budget while a leaf at max_depth larger than
-// usual is built; a leaf at max_depth too large for that quarter (max_depth_leaf_triangles)
-// fails the bake before its memory is spent.
+// fixed footprint, plus up to a quarter of the budget for each leaf at max_depth larger than
+// usual in work (two threads may each hold one); a leaf at max_depth too large for that
+// quarter (max_depth_leaf_triangles) fails the bake before its memory is spent.
 #pragma once
 
 #include <cstdint>
@@ -107,9 +107,8 @@ inline constexpr std::uint64_t kMinBakeBudget = std::uint64_t{1} << 20;
 // vertices of `layout` (a leaf of max_tris + 1 is always allowed): a quarter of the budget at
 // about 14 soup records of memory per triangle (its records, indexed mesh, simplification
 // arrays and LOD chain, measured on leaves of up to 400K triangles). That quarter comes on top
-// of the rest of the bake's buffers: a bake with a leaf near the cap peaks up to a quarter of
-// the budget higher. Depends only on its arguments: the cap refuses a bake, never changes its
-// tree.
+// of the rest of the bake's buffers, for each such leaf in work. Depends only on its arguments:
+// the cap refuses a bake, never changes its tree.
 std::uint64_t max_depth_leaf_triangles(std::uint64_t memory_budget_bytes, VertexLayout layout);
 
 struct BakeReport {
