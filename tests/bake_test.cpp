@@ -587,5 +587,18 @@ TEST_F(BakeTest, CliExitCodesForWriteFailureBadInputAndUnwritableOutput) {
   EXPECT_EQ(WEXITSTATUS(status), 4);
 }
 
+// The 60K rock in one root leaf, far over the cap of --memory 4M: exit 1 (usage), nothing
+// published, no temporary file.
+TEST_F(BakeTest, CliExitsWithUsageWhenALeafAtMaxDepthIsOverTheCap) {
+  ASSERT_NE(cli_path(), nullptr);
+  std::vector<std::string> args = bake_args(small_ply(), path("out"), work());
+  args.insert(args.end(), {"--max-depth", "0"});
+  const int status = wait_status(spawn_cli(args));
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 1);
+  EXPECT_FALSE(fs::exists(path("out")));
+  expect_no_temp_files();
+}
+
 }  // namespace
 }  // namespace octolod::bake
