@@ -107,10 +107,10 @@ void run(samplegen::Shape shape, std::uint64_t triangles, int repeat) {
     const bake::PreparedNode prepared = bake::prepare_node(node.mesh, node.cell);
     prepare_best = std::min(prepare_best, seconds_since(start));
     start = Clock::now();
-    const std::uint32_t g = bake::choose_grid_resolution(prepared, target);
+    const bake::Clustering clustering = bake::adaptive_grid_clustering(prepared, target);
     search_best = std::min(search_best, seconds_since(start));
     start = Clock::now();
-    const bake::ClusteredMesh clustered = bake::cluster_grid(prepared, g);
+    const bake::ClusteredMesh clustered = bake::build_clustered_mesh(prepared.mesh, clustering, prepared.origin);
     cluster_best = std::min(cluster_best, seconds_since(start));
     step_triangles = clustered.mesh.triangle_count();
     start = Clock::now();

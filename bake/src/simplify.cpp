@@ -61,10 +61,10 @@ Result<SimplifyResult> simplify_node(const NodeMesh& input, const Bounds& cell,
   if (options.method == ClusterMethod::bade2006) {
     result.mesh = cluster_bade2006(node);
   } else {
-    const std::uint32_t g = options.target_triangles > 0
-                                ? choose_grid_resolution(node, options.target_triangles)
-                                : options.grid_resolution;
-    ClusteredMesh clustered = cluster_grid(node, g);
+    ClusteredMesh clustered =
+        options.target_triangles > 0
+            ? build_clustered_mesh(node.mesh, adaptive_grid_clustering(node, options.target_triangles), node.origin)
+            : cluster_grid(node, options.grid_resolution);
     result.mesh = std::move(clustered.mesh);
     result.error_bound = hausdorff_upper_bound(node.mesh, result.mesh, clustered.hints());
     return result;
