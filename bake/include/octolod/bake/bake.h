@@ -30,7 +30,7 @@
 // children's LODs kept for their parents share the budget; kept LODs beyond their share are
 // re-read from their files by the parent. Peak RSS is about the budget plus the program's
 // fixed footprint, plus up to a quarter of the budget for each leaf at max_depth larger than
-// usual in work (two threads may each hold one); a leaf at max_depth too large for that
+// usual in work (each thread may hold one); a leaf at max_depth too large for that
 // quarter (max_depth_leaf_triangles) fails the bake before its memory is spent.
 #pragma once
 
@@ -66,7 +66,8 @@ struct BakeOptions {
   // memory on it: raise max_depth (or the budget) for dense models.
   std::uint32_t max_depth = 10;
   // Cap on the bake's buffers together (soup stage, octree sort, leaf buffers); the peak RSS is
-  // this plus the program's fixed footprint. Larger budgets mean fewer sorted runs and merges
+  // this plus the program's fixed footprint (and the share of leaves at max_depth larger than
+  // max_tris + 1: max_depth_leaf_triangles). Larger budgets mean fewer sorted runs and merges
   // and, once the vertices fit in half of it, the in-core soup path. At least kMinBakeBudget.
   std::uint64_t memory_budget_bytes = std::uint64_t{64} << 20;
   // Where the temporary files go (inside a fresh ".octolod-tmp-*" directory); empty: next to
