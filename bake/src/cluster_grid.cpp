@@ -276,7 +276,15 @@ std::size_t count_grid_triangles(const PreparedNode& node, std::uint32_t g) {
   return count_kept_triangles(node, dense_ids(vertex_keys(node, make_domain(node, g)), false).first);
 }
 
-std::uint32_t choose_grid_resolution(const PreparedNode& node, std::size_t target) {
+namespace {
+
+// choose_grid_resolution's answer and the count it measured there.
+struct GridChoice {
+  std::uint32_t g;
+  std::size_t count;
+};
+
+GridChoice search_grid_resolution(const PreparedNode& node, std::size_t target) {
   // Triangles grow about like g^2 on a surface. First guess from the area: a surface crosses
   // about 1.5 A / s^2 cubes of side s, and a closed mesh has about 2 triangles per vertex.
   // Then power-law corrections through the last count, keeping a feasible lower and an
@@ -289,7 +297,7 @@ std::uint32_t choose_grid_resolution(const PreparedNode& node, std::size_t targe
     if (!coarsest) coarsest = count_grid_triangles(node, 1);
     return *coarsest;
   };
-  if (coarsest_bound > target && count_coarsest() > target) return 1;
+  if (coarsest_bound > target && count_coarsest() > target) return {1, *coarsest};
   constexpr std::uint32_t kMaxResolution = 1u << 16;
   Bounds domain = node.cell;
   domain.extend(node.mesh_bounds);
@@ -322,8 +330,14 @@ std::uint32_t choose_grid_resolution(const PreparedNode& node, std::size_t targe
     if (g <= lo || g >= hi) g = lo + (hi - lo) / 2;  // the model stalled: bisect
   }
   // g = 1 unless the search found more triangles (within the target) than it keeps
-  if (best_count > coarsest_bound) return best;
-  return best_count > count_coarsest() ? best : 1;
+  if (best_count > coarsest_bound) return {best, best_count};
+  return best_count > count_coarsest() ? GridChoice{best, best_count} : GridChoice{1, *coarsest};
+}
+
+}  // namespace
+
+std::uint32_t choose_grid_resolution(const PreparedNode& node, std::size_t target) {
+  return search_grid_resolution(node, target).g;
 }
 
 ClusteredMesh cluster_grid(const PreparedNode& node, std::uint32_t g) {
@@ -332,7 +346,8 @@ ClusteredMesh cluster_grid(const PreparedNode& node, std::uint32_t g) {
 }
 
 Clustering adaptive_grid_clustering(const PreparedNode& node, std::size_t target) {
-  const std::uint32_t g = choose_grid_resolution(node, static_cast<std::size_t>(kCoarseShare * static_cast<double>(target)));
+  const GridChoice choice = search_grid_resolution(node, static_cast<std::size_t>(kCoarseShare * static_cast<double>(target)));
+  const std::uint32_t g = choice.g;
   if (g < kMinAdaptiveResolution) {
     const GridDomain uniform = make_domain(node, choose_grid_resolution(node, target));
     return clustering_from_keys(vertex_keys(node, uniform), uniform, uniform);
@@ -363,7 +378,7 @@ Clustering adaptive_grid_clustering(const PreparedNode& node, std::size_t target
   // when even the coarse grid is over (g = 1: the locked boundary dominates, the caller sees the
   // count).
   std::size_t feasible = 0, infeasible = order.size() + 1;
-  std::size_t feasible_count = count_with(0), infeasible_count = 0;
+  std::size_t feasible_count = choice.count, infeasible_count = 0;  // count_with(0)
   if (feasible_count > target) infeasible = 1;
   for (int evaluation = 0; evaluation < kHalvingSearchSteps && infeasible - feasible > 1 &&
                            static_cast<double>(feasible_count) < 0.97 * static_cast<double>(target);
