@@ -1,8 +1,9 @@
 // Per-node simplification and LOD chains of the baker (seed 3.5, 4.4, 3.5.3): vertex clustering
 // with generalized quadric error metrics (Garland & Heckbert 1998, "Simplifying surfaces with
 // color and texture using quadric error metrics"), either the seed's one-representative-per-node
-// operator or a uniform grid of cells inside the node (Lindstrom 2000, "Out-of-core
-// simplification of large polygonal models"), with the node's boundary locked so that nodes
+// operator or a grid of cells inside the node (Lindstrom 2000, "Out-of-core simplification of
+// large polygonal models"; adaptive on two levels for a wanted triangle count, in the spirit of
+// Shaffer & Garland 2001), with the node's boundary locked so that nodes
 // simplified independently never crack, and a conservative geometric error per result.
 //
 // Coordinate space: everything is in model units (the PLY's units, world space of the asset).
@@ -30,9 +31,11 @@
 namespace octolod::bake {
 
 enum class ClusterMethod {
-  // Lindstrom-style: a uniform grid of cubic cells inside the node, one quadric-optimal
-  // representative per cell (inside its cell), locked boundary vertices are their own
-  // clusters, triangles whose three corners land in three distinct clusters survive. The default.
+  // Lindstrom-style: a grid of cubic cells inside the node, one quadric-optimal representative
+  // per cell (inside its cell), locked boundary vertices are their own clusters, triangles whose
+  // three corners land in three distinct clusters survive. For a wanted triangle count the grid
+  // is adaptive: a coarser grid whose cells with the highest quadric error per area (where the
+  // surface bends inside the cell) are halved, as many as the count allows. The default.
   grid,
   // The seed's operator (Bade et al. 2006, 3.5): one representative for the whole node from the
   // node's summed quadric (pulled to the cell centre when it falls outside the cell), and every
@@ -42,19 +45,21 @@ enum class ClusterMethod {
 
 struct SimplifyOptions {
   ClusterMethod method = ClusterMethod::grid;
-  // grid only: the wanted triangle count. The grid resolution is searched so that the output has
-  // at most this many triangles when that is possible (the locked boundary alone may exceed it;
-  // then the coarsest grid, resolution 1, is used). 0 = use grid_resolution.
+  // grid only: the wanted triangle count. The adaptive grid (its coarse resolution and how many
+  // cells are halved) is searched so that the output has at most this many triangles when that
+  // is possible (the locked boundary alone may exceed it; then the coarsest grid, resolution 1,
+  // is used). 0 = use grid_resolution.
   std::uint32_t target_triangles = 0;
-  // grid only: cells along the longest side of the clustering domain (the node cell extended by
-  // the mesh bounds, since triangles assigned by centroid stick out of their cell). Used when
+  // grid only: a uniform grid with this many cells along the longest side of the clustering
+  // domain (the node cell extended by the mesh bounds, since triangles assigned by centroid stick
+  // out of their cell). Used when
   // target_triangles == 0; must then be >= 1. Higher = finer, more triangles.
   std::uint32_t grid_resolution = 0;
 };
 
 struct SimplifyResult {
-  // Welded indexed mesh, same layout as the input. Vertex order: sorted by cluster (grid cell
-  // order, then locked vertices in input order), so the same input and options give the same
+  // Welded indexed mesh, same layout as the input. Vertex order: sorted by cluster (coarse cells,
+  // then halved cells, in grid order, then locked vertices in input order), so the same input and options give the same
   // bytes on any thread. Normals unit length, colours in 0..1, no triangle with two corners at
   // the same position, no triangle repeated.
   NodeMesh mesh;
