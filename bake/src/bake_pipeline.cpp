@@ -105,13 +105,16 @@ std::string mib(std::uint64_t bytes) {
 // slope of peak RSS (/usr/bin/time -v) between one leaf of 100K and one of 400K triangles
 // (--max-depth 0, --memory 16M): rocks 4.4 (every attribute, 0.5 vertices per triangle) to 9.2
 // (positions only) records per triangle, a city's boxes 13.6 (every attribute, 2 vertices per
-// triangle). The worst, rounded up: the cap must hold for any input.
-constexpr std::uint64_t kLeafCostInRecords = 14;
+// triangle; 15.0 at --memory 4G, the in-memory octree's mesh included); bade2006 a third to a
+// half of that. The worst with some headroom: the cap must hold for any input.
+constexpr std::uint64_t kLeafCostInRecords = 16;
 // A leaf at max_depth, which cannot split, may cost up to 1 / kMaxDepthLeafShare of the budget
 // in the LOD stage. That share is not taken from the others (the octree sort keeps its own, and
 // with it the in-memory octree), so each such leaf in work (one per thread at most) may take
-// the bake up to that much above its usual peak: on the 1M city at --memory 29M, leaves of up
-// to 3968 triangles at --max-depth 4 (the cap: 3994), 62 MiB against 53 at --max-depth 10.
+// the bake up to that much above its usual peak: on the 1M city at --memory 33M, leaves of up
+// to 3968 triangles at --max-depth 4 (the cap: 3975) peaked at 52 to 66 MiB in three runs (66:
+// two at once), against 53 to 54 MiB at --max-depth 10; the 1M rock at --memory 29M, leaves of
+// up to 3473 at --max-depth 4 (cap 3494), 32 MiB as at --max-depth 10.
 constexpr std::uint64_t kMaxDepthLeafShare = 4;
 
 // The most triangles a leaf at max_depth may hold (max_depth_leaf_triangles), and the error that

@@ -106,7 +106,7 @@ inline constexpr std::uint64_t kMinBakeBudget = std::uint64_t{1} << 20;
 
 // The most triangles a leaf at max_depth may hold under a budget of memory_budget_bytes with
 // vertices of `layout` (a leaf of max_tris + 1 is always allowed): a quarter of the budget at
-// about 14 soup records of memory per triangle (its records, indexed mesh, simplification
+// about 16 soup records of memory per triangle (its records, indexed mesh, simplification
 // arrays and LOD chain, measured on leaves of up to 400K triangles). That quarter comes on top
 // of the rest of the bake's buffers, for each such leaf in work. Depends only on its arguments:
 // the cap refuses a bake, never changes its tree.
