@@ -695,8 +695,10 @@ TEST(SimplifyTest, AdaptiveGridBeatsTheUniformGridOnRms) {
   // The grid for a target halves the cells where the surface bends most (cluster.h,
   // adaptive_grid_clustering); a uniform grid at the resolution search's answer for the same
   // target spends its cells evenly. The adaptive output must be within the target, not much
-  // smaller than the uniform one, and closer to the input.
-  const NodeMesh rock = make_sample(samplegen::Shape::rock, kRmsComparisonRock);
+  // smaller than the uniform one, and closer to the input. A 20K rock in every build: at 8K
+  // (1/8 of a half is 499 triangles, about a third of them on the locked cut) the two are within
+  // a few percent of each other, either way.
+  const NodeMesh rock = make_sample(samplegen::Shape::rock, 20'000);
   const Node half = split_at_x(rock, rock.bounds(), 0.0f)[0];
   const auto target = static_cast<std::uint32_t>(half.mesh.triangle_count() / 8);
   const SimplifyResult adaptive = simplify(half.mesh, half.cell, grid_target(target));
