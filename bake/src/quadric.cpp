@@ -264,29 +264,44 @@ void minimize_quadric(int n, const double* q, const double* mean, double* v) {
   minimize_quadric_free_tail(n, 0, q, mean, v);
 }
 
-void minimize_quadric_free_tail(int n, int k, const double* q, const double* mean_free,
-                                double* v) {
+void add_free_block(int n, int k, const double* q, const double* x, double* acc) {
   assert(k >= 0 && k < n && n <= kMaxQuadricDim && "free coordinates k..n-1 must be non-empty");
   const int m = n - k;
-  Matrix mat;  // only its m x m block, written below, is read
-  Vector rhs{};
+  double* rhs = acc + m * (m + 1) / 2;  // b_f + A_fx x
   const double* b = q + n * (n + 1) / 2;
-  for (int i = 0; i < m; ++i) rhs[static_cast<std::size_t>(i)] = -b[k + i];
+  for (int i = 0; i < m; ++i) rhs[i] += b[k + i];
   const double* row = q;  // packed row r of A: A[r][r..n)
   for (int r = 0; r < n; ++r) {
     if (r < k) {
-      for (int i = 0; i < m; ++i) rhs[static_cast<std::size_t>(i)] -= row[k - r + i] * v[r];  // A_fx v_x
+      for (int i = 0; i < m; ++i) rhs[i] += row[k - r + i] * x[r];  // A_xf = A_fx^T
     } else {
-      const int i = r - k;
-      for (int j = i; j < m; ++j) {
-        const double value = row[j - i];
-        mat[static_cast<std::size_t>(i * kMaxQuadricDim + j)] = value;
-        mat[static_cast<std::size_t>(j * kMaxQuadricDim + i)] = value;
-      }
+      for (int j = r; j < n; ++j) *acc++ += row[j - r];  // A_ff row r - k, packed
     }
     row += n - r;
   }
-  solve_nearest(m, mat, rhs.data(), mean_free, v + k);
+}
+
+void minimize_free_block(int m, const double* block, const double* mean_free, double* free) {
+  assert(m >= 1 && m <= kMaxQuadricDim && "free coordinates must be 1..kMaxQuadricDim");
+  Matrix mat;  // only its m x m block, written below, is read
+  Vector rhs{};
+  const double* row = block;
+  for (int i = 0; i < m; ++i) {
+    for (int j = i; j < m; ++j) {
+      mat[static_cast<std::size_t>(i * kMaxQuadricDim + j)] = row[j - i];
+      mat[static_cast<std::size_t>(j * kMaxQuadricDim + i)] = row[j - i];
+    }
+    row += m - i;
+  }
+  for (int i = 0; i < m; ++i) rhs[static_cast<std::size_t>(i)] = -row[i];
+  solve_nearest(m, mat, rhs.data(), mean_free, free);
+}
+
+void minimize_quadric_free_tail(int n, int k, const double* q, const double* mean_free,
+                                double* v) {
+  double block[free_block_doubles(kMaxQuadricDim)] = {};
+  add_free_block(n, k, q, v, block);
+  minimize_free_block(n - k, block, mean_free, v + k);
 }
 
 }  // namespace octolod::bake

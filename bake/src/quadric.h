@@ -65,4 +65,15 @@ void minimize_quadric(int n, const double* q, const double* mean, double* v);
 void minimize_quadric_free_tail(int n, int k, const double* q, const double* mean_free,
                                 double* v);
 
+// What minimize_quadric_free_tail needs of a quadric once v[0..k) is known: A_ff's upper
+// triangle packed row by row ((n-k)(n-k+1)/2), then b_f + A_fx v_x (n-k). Sums of quadrics give
+// sums of blocks for the same v_x, so a wedge whose position is solved first accumulates
+// free_block_doubles(n - k) doubles per triangle instead of quadric_doubles(n) (44 instead of 78
+// with every attribute).
+constexpr std::size_t free_block_doubles(int m) { return static_cast<std::size_t>(m * (m + 1) / 2 + m); }
+// acc += the free block of q (dimension n) with the first k coordinates fixed at x.
+void add_free_block(int n, int k, const double* q, const double* x, double* acc);
+// minimize_quadric_free_tail from a free block of m = n - k coordinates: writes the m free ones.
+void minimize_free_block(int m, const double* block, const double* mean_free, double* free);
+
 }  // namespace octolod::bake

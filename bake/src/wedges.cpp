@@ -227,39 +227,25 @@ ClusteredMesh build_clustered_mesh(const NodeMesh& mesh, const Clustering& clust
   // quadrics.
   auto solved = [&](std::uint32_t v) { return !locked(v) && cluster_vertices[cluster[v]] > 1; };
 
-  // quadrics: every triangle's area-weighted quadric added to the cluster (position-only) and
-  // the wedge (generalized) of each of its corners that is solved; generalized quadrics (up to
-  // 78 doubles) only for the solved wedges, packed in wedge order
+  // position quadrics: every triangle's area-weighted plane quadric added to the cluster of each
+  // of its corners that is solved
   const std::size_t q3 = quadric_doubles(3);
-  const std::size_t qn = quadric_doubles(n);
   std::vector<double> cluster_quadric(clustering.count * q3, 0.0);
-  std::vector<std::uint32_t> quadric_slot(wedge_count, 0);
-  std::size_t solved_wedges = 0;
-  for (std::size_t w = 0; w < wedge_count; ++w)
-    if (solved(static_cast<std::uint32_t>(order[w]))) quadric_slot[w] = static_cast<std::uint32_t>(solved_wedges++);
-  std::vector<double> wedge_quadric(attribute_count > 0 ? solved_wedges * qn : 0, 0.0);
+  auto triangle_area = [&](std::size_t t) {
+    const std::array<double, 3>& fn = face_normal[t];
+    return 0.5 * std::sqrt(fn[0] * fn[0] + fn[1] * fn[1] + fn[2] * fn[2]);
+  };
   for (std::size_t t = 0; t < triangle_count; ++t) {
     const std::uint32_t* corner = &mesh.indices[3 * t];
     if (!solved(corner[0]) && !solved(corner[1]) && !solved(corner[2])) continue;
-    const std::array<double, 3>& fn = face_normal[t];
-    const double area = 0.5 * std::sqrt(fn[0] * fn[0] + fn[1] * fn[1] + fn[2] * fn[2]);
+    const double area = triangle_area(t);
     if (!(area > 0.0)) continue;
-    double p[3][kMaxQuadricDim];
-    for (int k = 0; k < 3; ++k) local_vertex(corner[k], p[k]);
+    double p0[kMaxQuadricDim];
+    local_vertex(corner[0], p0);
     double quadric3[quadric_doubles(3)];
-    double quadric_n[kMaxQuadricDoubles];
-    plane_quadric(fn.data(), p[0], area, quadric3);
-    if (attribute_count > 0) {
-      for (int k = 0; k < 3; ++k)
-        for (int i = 0; i < 3; ++i) p[k][i] *= position_scale;
-      triangle_quadric(n, p[0], p[1], p[2], area, quadric_n);
-    }
-    for (int k = 0; k < 3; ++k) {
-      const std::uint32_t v = corner[k];
-      if (!solved(v)) continue;
-      add_quadric(3, &cluster_quadric[cluster[v] * q3], quadric3);
-      if (attribute_count > 0) add_quadric(n, &wedge_quadric[quadric_slot[wedge[v]] * qn], quadric_n);
-    }
+    plane_quadric(face_normal[t].data(), p0, area, quadric3);
+    for (int k = 0; k < 3; ++k)
+      if (solved(corner[k])) add_quadric(3, &cluster_quadric[cluster[corner[k]] * q3], quadric3);
   }
 
   // representatives: cluster positions, then wedge attributes with the position fixed. A
@@ -290,6 +276,40 @@ ClusteredMesh build_clustered_mesh(const NodeMesh& mesh, const Clustering& clust
     const double* best = &vertex_candidate[c * 4];
     if (best[3] < evaluate_quadric(3, quadric, x)) std::copy(best, best + 3, x);
   }
+
+  // attribute quadrics, once the positions are known: every triangle's generalized quadric
+  // (Garland & Heckbert 1998) added to the wedge of each of its solved corners as the block
+  // the attribute solve needs with the wedge's position fixed (quadric.h, add_free_block: 44
+  // doubles per wedge with every attribute instead of the 78 of a whole quadric), packed in
+  // wedge order
+  const int m = attribute_count;
+  const std::size_t block_size = m > 0 ? free_block_doubles(m) : 0;
+  std::vector<std::uint32_t> block_slot(wedge_count, 0);
+  std::size_t solved_wedges = 0;
+  for (std::size_t w = 0; w < wedge_count; ++w)
+    if (solved(static_cast<std::uint32_t>(order[w]))) block_slot[w] = static_cast<std::uint32_t>(solved_wedges++);
+  std::vector<double> wedge_block(solved_wedges * block_size, 0.0);
+  for (std::size_t t = 0; m > 0 && t < triangle_count; ++t) {
+    const std::uint32_t* corner = &mesh.indices[3 * t];
+    if (!solved(corner[0]) && !solved(corner[1]) && !solved(corner[2])) continue;
+    const double area = triangle_area(t);
+    if (!(area > 0.0)) continue;
+    double p[3][kMaxQuadricDim];
+    for (int k = 0; k < 3; ++k) {
+      local_vertex(corner[k], p[k]);
+      for (int i = 0; i < 3; ++i) p[k][i] *= position_scale;
+    }
+    double quadric_n[kMaxQuadricDoubles];
+    triangle_quadric(n, p[0], p[1], p[2], area, quadric_n);
+    for (int k = 0; k < 3; ++k) {
+      const std::uint32_t v = corner[k];
+      if (!solved(v)) continue;
+      double x[3];
+      for (int i = 0; i < 3; ++i) x[i] = cluster_position[cluster[v] * 3 + static_cast<std::size_t>(i)] * position_scale;
+      add_free_block(n, 3, quadric_n, x, &wedge_block[block_slot[wedge[v]] * block_size]);
+    }
+  }
+
   for (std::size_t w = 0; w < wedge_count; ++w) {
     const auto root = static_cast<std::uint32_t>(order[w]);
     float* record = &wedge_record[w * stride];
@@ -308,10 +328,9 @@ ClusteredMesh build_clustered_mesh(const NodeMesh& mesh, const Clustering& clust
       continue;
     }
     if (attribute_count > 0) {
-      for (int i = 0; i < 3; ++i) v[i] = cluster_position[c * 3 + static_cast<std::size_t>(i)] * position_scale;
       double mean[kMaxQuadricDim];
       for (int i = 0; i < n; ++i) mean[i] = wedge_sum[w * stride + static_cast<std::size_t>(i)] / wedge_vertices[w];
-      minimize_quadric_free_tail(n, 3, &wedge_quadric[quadric_slot[w] * qn], mean + 3, v);
+      minimize_free_block(m, &wedge_block[block_slot[w] * block_size], mean + 3, v + 3);
       finish_attributes(layout, layout.normal ? mean + 3 : nullptr, v + 3);
     }
     for (int i = 0; i < 3; ++i) v[i] = cluster_position[c * 3 + static_cast<std::size_t>(i)];
