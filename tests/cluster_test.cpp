@@ -336,6 +336,20 @@ TEST(QuadricTest, LinearAttributesInterpolateExactly) {
     const double mean[8] = {0, 0, 0, 0, 0, 0, 0, 0};  // far from the answer on purpose
     minimize_quadric_free_tail(11, 3, sum, mean, v);
     for (int i = 3; i < 11; ++i) EXPECT_NEAR(v[i], expected[i], 1e-9) << "attribute " << i;
+    // as wedges.cpp accumulates: each triangle's free block for the fixed position, summed
+    double block[free_block_doubles(8)] = {};
+    for (int t = 0; t < 2; ++t) {
+      double a[11], b[11], c[11];
+      vertex(corners[0][0], corners[0][1], a);
+      vertex(corners[t + 1][0], corners[t + 1][1], b);
+      vertex(corners[t + 2][0], corners[t + 2][1], c);
+      double q[kMaxQuadricDoubles];
+      triangle_quadric(11, a, b, c, 0.7 + t, q);
+      add_free_block(11, 3, q, expected, block);
+    }
+    double attributes[8];
+    minimize_free_block(8, block, mean, attributes);
+    for (int i = 3; i < 11; ++i) EXPECT_NEAR(attributes[i - 3], expected[i], 1e-9) << "attribute " << i << " (blocks)";
   }
 }
 
