@@ -264,21 +264,32 @@ void minimize_quadric(int n, const double* q, const double* mean, double* v) {
   minimize_quadric_free_tail(n, 0, q, mean, v);
 }
 
-void add_free_block(int n, int k, const double* q, const double* x, double* acc) {
-  assert(k >= 0 && k < n && n <= kMaxQuadricDim && "free coordinates k..n-1 must be non-empty");
+namespace {
+
+// add_free_block for a dimension known at compile time: the loops unroll (it runs once per
+// solved corner of every triangle of a node).
+template <int n>
+void add_free_block_fixed(int k, const double* q, const double* x, double* acc) {
   const int m = n - k;
-  double* rhs = acc + m * (m + 1) / 2;  // b_f + A_fx x
+  const int ff = m * (m + 1) / 2;
+  // A's packed rows k..n-1 hold exactly A_ff, packed the same way, after the k rows before them
+  const double* a_ff = q + (k * n - k * (k - 1) / 2);
+  for (int i = 0; i < ff; ++i) acc[i] += a_ff[i];
+  double* rhs = acc + ff;  // b_f + A_fx x
   const double* b = q + n * (n + 1) / 2;
   for (int i = 0; i < m; ++i) rhs[i] += b[k + i];
   const double* row = q;  // packed row r of A: A[r][r..n)
-  for (int r = 0; r < n; ++r) {
-    if (r < k) {
-      for (int i = 0; i < m; ++i) rhs[i] += row[k - r + i] * x[r];  // A_xf = A_fx^T
-    } else {
-      for (int j = r; j < n; ++j) *acc++ += row[j - r];  // A_ff row r - k, packed
-    }
+  for (int r = 0; r < k; ++r) {
+    for (int i = 0; i < m; ++i) rhs[i] += row[k - r + i] * x[r];  // A_xf = A_fx^T
     row += n - r;
   }
+}
+
+}  // namespace
+
+void add_free_block(int n, int k, const double* q, const double* x, double* acc) {
+  assert(k >= 0 && k < n && n <= kMaxQuadricDim && "free coordinates k..n-1 must be non-empty");
+  with_fixed_dimension(n, [&](auto fixed) { add_free_block_fixed<decltype(fixed)::value>(k, q, x, acc); });
 }
 
 void minimize_free_block(int m, const double* block, const double* mean_free, double* free) {
