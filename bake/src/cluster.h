@@ -31,7 +31,8 @@ ClusteredMesh cluster_grid(const PreparedNode& node, std::uint32_t g);
 // Grid method for a wanted triangle count: a coarse grid whose resolution is searched for about
 // 0.8 x target triangles, then the clusters with the highest quadric error per area (where the
 // surface bends inside the cell) halved into the 2 x 2 x 2 cells of the grid at twice the
-// resolution, as many as keep the count within `target` (a short bisection). The clustering for
+// resolution, as many as keep the count within `target` (interpolation and bisection, at most 6
+// counts, stopping within 3% below the target). The clustering for
 // build_clustered_mesh: clusters in key order (coarse cells, halved cells, locked positions), so
 // the result depends only on the node. Below 8 coarse cells along the longest side, the uniform
 // grid for the target (choose_grid_resolution) instead; when even the coarsest grid is over the
