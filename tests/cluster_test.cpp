@@ -318,6 +318,7 @@ TEST(QuadricTest, LinearAttributesInterpolateExactly) {
     v[6] = 0.2 + 0.3 * x, v[7] = 0.5 - 0.1 * y, v[8] = 0.1 * x + 0.2 * y;  // colour
     v[9] = 2 * x - y, v[10] = 0.5 * y;                             // uv
   };
+  double quadric[2][kMaxQuadricDoubles];
   double sum[kMaxQuadricDoubles] = {};
   const double corners[4][2] = {{0, 0}, {1, 0}, {1.2, 0.9}, {-0.1, 1}};
   for (int t = 0; t < 2; ++t) {
@@ -325,9 +326,8 @@ TEST(QuadricTest, LinearAttributesInterpolateExactly) {
     vertex(corners[0][0], corners[0][1], a);
     vertex(corners[t + 1][0], corners[t + 1][1], b);
     vertex(corners[t + 2][0], corners[t + 2][1], c);
-    double q[kMaxQuadricDoubles];
-    triangle_quadric(11, a, b, c, 0.7 + t, q);
-    add_quadric(11, sum, q);
+    triangle_quadric(11, a, b, c, 0.7 + t, quadric[t]);
+    add_quadric(11, sum, quadric[t]);
   }
   for (const auto& at : {std::array<double, 2>{0.4, 0.3}, std::array<double, 2>{2.0, -1.0}}) {
     double expected[11], v[11];
@@ -338,15 +338,7 @@ TEST(QuadricTest, LinearAttributesInterpolateExactly) {
     for (int i = 3; i < 11; ++i) EXPECT_NEAR(v[i], expected[i], 1e-9) << "attribute " << i;
     // as wedges.cpp accumulates: each triangle's free block for the fixed position, summed
     double block[free_block_doubles(8)] = {};
-    for (int t = 0; t < 2; ++t) {
-      double a[11], b[11], c[11];
-      vertex(corners[0][0], corners[0][1], a);
-      vertex(corners[t + 1][0], corners[t + 1][1], b);
-      vertex(corners[t + 2][0], corners[t + 2][1], c);
-      double q[kMaxQuadricDoubles];
-      triangle_quadric(11, a, b, c, 0.7 + t, q);
-      add_free_block(11, 3, q, expected, block);
-    }
+    for (const double* q : quadric) add_free_block(11, 3, q, expected, block);
     double attributes[8];
     minimize_free_block(8, block, mean, attributes);
     for (int i = 3; i < 11; ++i) EXPECT_NEAR(attributes[i - 3], expected[i], 1e-9) << "attribute " << i << " (blocks)";
