@@ -212,46 +212,24 @@ Clustering clustering_from_keys(const std::vector<std::uint64_t>& keys, const Gr
 
 // The order in which the adaptive grid halves the clusters of `cluster` (dense ids of the coarse
 // keys, `distinct` their keys): highest quadric error per area first, where the error is the
-// cluster's position quadric (area-weighted planes of the triangles at its vertices, as
-// build_clustered_mesh sums them) at its minimizer nearest the cluster's mean: the mean squared
-// distance of its surface to the flat piece that replaces it, large where the surface bends within
-// the cell. Locked clusters and clusters of one vertex (nothing to halve) are left out; equal
+// cluster's position quadric (add_plane_quadrics, as build_clustered_mesh sums them) at its
+// minimizer nearest the cluster's mean: the mean squared distance of its surface to the flat
+// piece that replaces it, large where the surface bends within the cell. Locked clusters and clusters of one vertex (nothing to halve) are left out; equal
 // errors in key order.
 std::vector<std::uint32_t> clusters_by_error(const PreparedNode& node, const std::vector<std::uint32_t>& cluster,
                                              const std::vector<std::uint64_t>& distinct) {
   const std::size_t stride = node.mesh.layout.floats();
   const std::size_t count = distinct.size();
-  auto local = [&](std::uint32_t v, double* out) {
-    for (std::size_t i = 0; i < 3; ++i)
-      out[i] = static_cast<double>(node.mesh.vertices[v * stride + i]) - node.origin[i];
-  };
-  auto unlocked = [&](std::uint32_t v) { return (distinct[cluster[v]] & kLockedKey) == 0; };
+  std::vector<std::uint8_t> unlocked(cluster.size());
+  for (std::size_t v = 0; v < cluster.size(); ++v) unlocked[v] = (distinct[cluster[v]] & kLockedKey) == 0;
   constexpr std::size_t q3 = quadric_doubles(3);
   std::vector<double> quadric(count * q3, 0.0), area(count, 0.0), sum(count * 3, 0.0);
+  add_plane_quadrics(node.mesh, face_normals(node.mesh), cluster, unlocked, node.origin, quadric.data(), area.data());
   std::vector<std::uint32_t> members(count, 0);
-  for (std::size_t t = 0; t < node.mesh.triangle_count(); ++t) {
-    const std::uint32_t* corner = &node.mesh.indices[3 * t];
-    if (!unlocked(corner[0]) && !unlocked(corner[1]) && !unlocked(corner[2])) continue;
-    double p[3][3];
-    for (int k = 0; k < 3; ++k) local(corner[k], p[k]);
-    const double e1[3] = {p[1][0] - p[0][0], p[1][1] - p[0][1], p[1][2] - p[0][2]};
-    const double e2[3] = {p[2][0] - p[0][0], p[2][1] - p[0][1], p[2][2] - p[0][2]};
-    const double normal[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
-    const double a = 0.5 * std::sqrt(normal[0] * normal[0] + normal[1] * normal[1] + normal[2] * normal[2]);
-    if (!(a > 0.0)) continue;
-    double q[q3];
-    plane_quadric(normal, p[0], a, q);
-    for (int k = 0; k < 3; ++k) {
-      if (!unlocked(corner[k])) continue;
-      add_quadric(3, &quadric[cluster[corner[k]] * q3], q);
-      area[cluster[corner[k]]] += a;
-    }
-  }
   for (std::uint32_t v = 0; v < cluster.size(); ++v) {
-    if (!unlocked(v)) continue;
-    double x[3];
-    local(v, x);
-    for (std::size_t i = 0; i < 3; ++i) sum[cluster[v] * 3 + i] += x[i];
+    if (!unlocked[v]) continue;
+    for (std::size_t i = 0; i < 3; ++i)
+      sum[cluster[v] * 3 + i] += static_cast<double>(node.mesh.vertices[v * stride + i]) - node.origin[i];
     ++members[cluster[v]];
   }
   std::vector<std::pair<double, std::uint32_t>> ranked;  // (-error per area, cluster)
@@ -340,18 +318,24 @@ std::uint32_t choose_grid_resolution(const PreparedNode& node, std::size_t targe
   return search_grid_resolution(node, target).g;
 }
 
-ClusteredMesh cluster_grid(const PreparedNode& node, std::uint32_t g) {
+namespace {
+
+// The uniform grid at resolution g as a clustering.
+Clustering uniform_clustering(const PreparedNode& node, std::uint32_t g) {
   const GridDomain grid = make_domain(node, g);
-  return build_clustered_mesh(node.mesh, clustering_from_keys(vertex_keys(node, grid), grid, grid), node.origin);
+  return clustering_from_keys(vertex_keys(node, grid), grid, grid);
+}
+
+}  // namespace
+
+ClusteredMesh cluster_grid(const PreparedNode& node, std::uint32_t g) {
+  return build_clustered_mesh(node.mesh, uniform_clustering(node, g), node.origin);
 }
 
 Clustering adaptive_grid_clustering(const PreparedNode& node, std::size_t target) {
   const GridChoice choice = search_grid_resolution(node, static_cast<std::size_t>(kCoarseShare * static_cast<double>(target)));
   const std::uint32_t g = choice.g;
-  if (g < kMinAdaptiveResolution) {
-    const GridDomain uniform = make_domain(node, choose_grid_resolution(node, target));
-    return clustering_from_keys(vertex_keys(node, uniform), uniform, uniform);
-  }
+  if (g < kMinAdaptiveResolution) return uniform_clustering(node, choose_grid_resolution(node, target));
   const GridDomain coarse = make_domain(node, g);
   const GridDomain fine = halved(coarse);
   const std::vector<std::uint64_t> coarse_keys = vertex_keys(node, coarse);

@@ -124,6 +124,43 @@ NodeMesh weld_identical_vertices(const NodeMesh& mesh) {
   return out;
 }
 
+std::vector<std::array<double, 3>> face_normals(const NodeMesh& mesh) {
+  const std::size_t stride = mesh.layout.floats();
+  std::vector<std::array<double, 3>> normals(mesh.triangle_count());
+  for (std::size_t t = 0; t < normals.size(); ++t) {
+    const float* p0 = &mesh.vertices[mesh.indices[3 * t] * stride];
+    const float* p1 = &mesh.vertices[mesh.indices[3 * t + 1] * stride];
+    const float* p2 = &mesh.vertices[mesh.indices[3 * t + 2] * stride];
+    const std::array<double, 3> e1{double(p1[0]) - p0[0], double(p1[1]) - p0[1], double(p1[2]) - p0[2]};
+    const std::array<double, 3> e2{double(p2[0]) - p0[0], double(p2[1]) - p0[1], double(p2[2]) - p0[2]};
+    normals[t] = cross(e1, e2);
+  }
+  return normals;
+}
+
+void add_plane_quadrics(const NodeMesh& mesh, std::span<const std::array<double, 3>> normals,
+                        const std::vector<std::uint32_t>& cluster, const std::vector<std::uint8_t>& counted,
+                        const std::array<double, 3>& origin, double* quadrics, double* areas) {
+  constexpr std::size_t q3 = quadric_doubles(3);
+  const std::size_t stride = mesh.layout.floats();
+  for (std::size_t t = 0; t < mesh.triangle_count(); ++t) {
+    const std::uint32_t* corner = &mesh.indices[3 * t];
+    if (!counted[corner[0]] && !counted[corner[1]] && !counted[corner[2]]) continue;
+    const std::array<double, 3>& normal = normals[t];
+    const double area = 0.5 * std::sqrt(normal[0] * normal[0] + normal[1] * normal[1] + normal[2] * normal[2]);
+    if (!(area > 0.0)) continue;
+    double p0[3];
+    for (std::size_t i = 0; i < 3; ++i) p0[i] = static_cast<double>(mesh.vertices[corner[0] * stride + i]) - origin[i];
+    double quadric[q3];
+    plane_quadric(normal.data(), p0, area, quadric);
+    for (int k = 0; k < 3; ++k) {
+      if (!counted[corner[k]]) continue;
+      add_quadric(3, &quadrics[cluster[corner[k]] * q3], quadric);
+      if (areas) areas[cluster[corner[k]]] += area;
+    }
+  }
+}
+
 void finish_attributes(VertexLayout layout, const double* fallback_normal, double* attributes) {
   if (layout.normal) {
     double* n = attributes;
@@ -190,18 +227,9 @@ ClusteredMesh build_clustered_mesh(const NodeMesh& mesh, const Clustering& clust
   // edge length, so a triangle spans about one unit in position. Garland & Heckbert scale the
   // model into the unit cube for the same reason: with tiny triangles the attribute directions
   // dominate the plane in R^n and the attribute systems become nearly singular.
-  std::vector<std::array<double, 3>> face_normal(triangle_count);
+  const std::vector<std::array<double, 3>> face_normal = face_normals(mesh);
   double total_area = 0.0;
-  for (std::size_t t = 0; t < triangle_count; ++t) {
-    const float* p0 = &mesh.vertices[mesh.indices[3 * t] * stride];
-    const float* p1 = &mesh.vertices[mesh.indices[3 * t + 1] * stride];
-    const float* p2 = &mesh.vertices[mesh.indices[3 * t + 2] * stride];
-    const std::array<double, 3> e1{double(p1[0]) - p0[0], double(p1[1]) - p0[1], double(p1[2]) - p0[2]};
-    const std::array<double, 3> e2{double(p2[0]) - p0[0], double(p2[1]) - p0[1], double(p2[2]) - p0[2]};
-    face_normal[t] = cross(e1, e2);
-    const std::array<double, 3>& fn = face_normal[t];
-    total_area += 0.5 * std::sqrt(fn[0] * fn[0] + fn[1] * fn[1] + fn[2] * fn[2]);
-  }
+  for (const std::array<double, 3>& fn : face_normal) total_area += 0.5 * std::sqrt(fn[0] * fn[0] + fn[1] * fn[1] + fn[2] * fn[2]);
   const double position_scale =
       total_area > 0.0 ? std::sqrt(static_cast<double>(triangle_count) / (2.0 * total_area)) : 1.0;
 
@@ -230,23 +258,14 @@ ClusteredMesh build_clustered_mesh(const NodeMesh& mesh, const Clustering& clust
   // position quadrics: every triangle's area-weighted plane quadric added to the cluster of each
   // of its corners that is solved
   const std::size_t q3 = quadric_doubles(3);
+  std::vector<std::uint8_t> solved_vertex(vertex_count);
+  for (std::uint32_t v = 0; v < vertex_count; ++v) solved_vertex[v] = solved(v);
   std::vector<double> cluster_quadric(clustering.count * q3, 0.0);
+  add_plane_quadrics(mesh, face_normal, cluster, solved_vertex, origin, cluster_quadric.data(), nullptr);
   auto triangle_area = [&](std::size_t t) {
     const std::array<double, 3>& fn = face_normal[t];
     return 0.5 * std::sqrt(fn[0] * fn[0] + fn[1] * fn[1] + fn[2] * fn[2]);
   };
-  for (std::size_t t = 0; t < triangle_count; ++t) {
-    const std::uint32_t* corner = &mesh.indices[3 * t];
-    if (!solved(corner[0]) && !solved(corner[1]) && !solved(corner[2])) continue;
-    const double area = triangle_area(t);
-    if (!(area > 0.0)) continue;
-    double p0[kMaxQuadricDim];
-    local_vertex(corner[0], p0);
-    double quadric3[quadric_doubles(3)];
-    plane_quadric(face_normal[t].data(), p0, area, quadric3);
-    for (int k = 0; k < 3; ++k)
-      if (solved(corner[k])) add_quadric(3, &cluster_quadric[cluster[corner[k]] * q3], quadric3);
-  }
 
   // representatives: cluster positions, then wedge attributes with the position fixed. A
   // cluster's position is the minimizer of its quadric, pulled into its cell towards the mean

@@ -11,6 +11,7 @@
 
 #include <array>
 #include <cstdint>
+#include <span>
 #include <vector>
 
 #include "error_bound.h"
@@ -67,6 +68,19 @@ struct ClusteredMesh {
 };
 ClusteredMesh build_clustered_mesh(const NodeMesh& mesh, const Clustering& clustering,
                                    const std::array<double, 3>& origin);
+
+// Per triangle of `mesh`: the cross product of its edges from corner 0, in double from the
+// model-unit floats (its normal times twice its area).
+std::vector<std::array<double, 3>> face_normals(const NodeMesh& mesh);
+
+// The position quadrics of a clustering: every triangle with a positive area adds its plane
+// quadric (quadric.h, n = 3; the plane through corner 0 relative to `origin`, model units)
+// weighted by its area to quadrics[cluster[v]] (quadric_doubles(3) doubles per cluster) for each
+// corner v with counted[v], once per such corner, and that area to areas[cluster[v]] when
+// `areas` is not null. `normals` from face_normals(mesh).
+void add_plane_quadrics(const NodeMesh& mesh, std::span<const std::array<double, 3>> normals,
+                        const std::vector<std::uint32_t>& cluster, const std::vector<std::uint8_t>& counted,
+                        const std::array<double, 3>& origin, double* quadrics, double* areas);
 
 // Post-processing of a solved attribute vector in VertexLayout order (after the position):
 // normals renormalized (`fallback_normal` when zero), colours clamped to 0..1.
