@@ -1,5 +1,9 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <fstream>
+#include <iterator>
+
 #include "octolod/formats/node_file.h"
 
 namespace octolod {
@@ -112,6 +116,60 @@ TEST(NodeFile, WriteThenReadFromDisk) {
   Result<NodeMesh> missing = read_node_file(path);
   ASSERT_FALSE(missing.ok());
   EXPECT_EQ(missing.status().code(), ErrorCode::io);
+}
+
+std::vector<char> file_bytes(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+// The streaming writer, fed in uneven pieces (some crossing its 1 MiB buffer), writes the same
+// bytes as write_node_file: a 16-bit-index quad, a 32-bit-index mesh of 5 MiB with every
+// attribute, and an empty mesh (zero bounds).
+TEST(NodeFile, StreamedFileEqualsWriteNodeFile) {
+  NodeMesh big;
+  big.layout = {true, true, true};
+  const std::size_t stride = big.layout.floats();
+  for (std::uint32_t v = 0; v < 120000; ++v)
+    for (std::size_t i = 0; i < stride; ++i) big.vertices.push_back(static_cast<float>(v * stride + i) * 0.25f);
+  for (std::uint32_t t = 0; t < 100000; ++t) big.indices.insert(big.indices.end(), {t, t + 1, (t * 7) % 120000});
+  NodeMesh empty;
+  const auto dir = std::filesystem::path(::testing::TempDir());
+  for (const NodeMesh& mesh : {quad_mesh({true, false, true}), big, empty}) {
+    ASSERT_TRUE(write_node_file(dir / "whole.olod", mesh).ok());
+    auto writer = NodeFileWriter::create(dir / "streamed.olod", mesh.layout,
+                                         static_cast<std::uint32_t>(mesh.vertex_count()),
+                                         static_cast<std::uint32_t>(mesh.indices.size()), mesh.bounds());
+    ASSERT_TRUE(writer.ok()) << writer.status().message();
+    const std::size_t floats = mesh.layout.floats();
+    for (std::size_t v = 0, step = 1; v < mesh.vertex_count(); v += step, step = step * 3 + 1) {
+      const std::size_t n = std::min(step, mesh.vertex_count() - v);
+      ASSERT_TRUE(writer->append_vertices(std::span(mesh.vertices).subspan(v * floats, n * floats)).ok());
+    }
+    for (std::size_t i = 0, step = 3; i < mesh.indices.size(); i += step, step = step * 5 + 2) {
+      const std::size_t n = std::min(step, mesh.indices.size() - i);
+      ASSERT_TRUE(writer->append_indices(std::span(mesh.indices).subspan(i, n)).ok());
+    }
+    auto bytes = writer->finish();
+    ASSERT_TRUE(bytes.ok()) << bytes.status().message();
+    EXPECT_EQ(bytes.value(), node_file_size(mesh));
+    EXPECT_TRUE(file_bytes(dir / "streamed.olod") == file_bytes(dir / "whole.olod"))
+        << mesh.triangle_count() << " triangles";
+  }
+  std::filesystem::remove(dir / "whole.olod");
+  std::filesystem::remove(dir / "streamed.olod");
+}
+
+// A writer dropped before finish() leaves no file behind.
+TEST(NodeFile, UnfinishedStreamedFileIsRemoved) {
+  const auto path = std::filesystem::path(::testing::TempDir()) / "unfinished.olod";
+  {
+    auto writer = NodeFileWriter::create(path, {}, 3, 3, Bounds{{0, 0, 0}, {1, 1, 1}});
+    ASSERT_TRUE(writer.ok());
+    const float vertices[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+    ASSERT_TRUE(writer->append_vertices(vertices).ok());
+  }
+  EXPECT_FALSE(std::filesystem::exists(path));
 }
 
 }  // namespace

@@ -1,6 +1,7 @@
 // Node LOD file encoding/decoding; the layout is documented in node_file.h and docs/formats.md.
 #include "octolod/formats/node_file.h"
 
+#include <algorithm>
 #include <array>
 #include <cassert>
 #include <cerrno>
@@ -9,6 +10,7 @@
 #include <cstdio>
 #include <fstream>
 #include <string>
+#include <utility>
 
 #include <fcntl.h>
 #include <unistd.h>
@@ -49,29 +51,44 @@ std::size_t node_file_size(const NodeMesh& mesh) {
          mesh.indices.size() * index_bytes_for(mesh.vertex_count()) + kCrcBytes;
 }
 
-std::vector<std::byte> encode_node_file(const NodeMesh& mesh) {
-  assert(mesh.vertices.size() % mesh.layout.floats() == 0 && "NodeMesh: partial vertex");
-  assert(mesh.indices.size() % 3 == 0 && "NodeMesh: partial triangle");
-  const std::uint32_t index_bytes = index_bytes_for(mesh.vertex_count());
-  std::vector<std::byte> out;
-  out.reserve(node_file_size(mesh));
+namespace {
+
+void append_header(std::vector<std::byte>& out, VertexLayout layout, std::uint32_t vertex_count,
+                   std::uint32_t index_count, const Bounds& bounds) {
   for (char c : kMagic) out.push_back(static_cast<std::byte>(c));
   detail::append_le(out, kNodeFileVersion);
-  detail::append_le(out, mesh.layout.mask());
-  detail::append_le(out, static_cast<std::uint32_t>(mesh.vertex_count()));
-  detail::append_le(out, static_cast<std::uint32_t>(mesh.indices.size()));
-  detail::append_le(out, index_bytes);
+  detail::append_le(out, layout.mask());
+  detail::append_le(out, vertex_count);
+  detail::append_le(out, index_count);
+  detail::append_le(out, index_bytes_for(vertex_count));
   detail::append_le(out, std::uint32_t{0});
-  Bounds b = mesh.vertex_count() ? mesh.bounds() : Bounds{{0, 0, 0}, {0, 0, 0}};
+  const Bounds b = vertex_count ? bounds : Bounds{{0, 0, 0}, {0, 0, 0}};
   for (float v : b.min) detail::append_le(out, v);
   for (float v : b.max) detail::append_le(out, v);
-  const auto* vbytes = reinterpret_cast<const std::byte*>(mesh.vertices.data());
-  out.insert(out.end(), vbytes, vbytes + mesh.vertices.size() * sizeof(float));
-  for (std::uint32_t i : mesh.indices) {
-    assert(i < mesh.vertex_count() && "NodeMesh: index out of range");
+}
+
+void append_index_bytes(std::vector<std::byte>& out, std::span<const std::uint32_t> indices,
+                    std::uint32_t index_bytes) {
+  for (std::uint32_t i : indices) {
     if (index_bytes == 2) detail::append_le(out, static_cast<std::uint16_t>(i));
     else detail::append_le(out, i);
   }
+}
+
+}  // namespace
+
+std::vector<std::byte> encode_node_file(const NodeMesh& mesh) {
+  assert(mesh.vertices.size() % mesh.layout.floats() == 0 && "NodeMesh: partial vertex");
+  assert(mesh.indices.size() % 3 == 0 && "NodeMesh: partial triangle");
+  std::vector<std::byte> out;
+  out.reserve(node_file_size(mesh));
+  append_header(out, mesh.layout, static_cast<std::uint32_t>(mesh.vertex_count()),
+                static_cast<std::uint32_t>(mesh.indices.size()), mesh.bounds());
+  const auto* vbytes = reinterpret_cast<const std::byte*>(mesh.vertices.data());
+  out.insert(out.end(), vbytes, vbytes + mesh.vertices.size() * sizeof(float));
+  for ([[maybe_unused]] std::uint32_t i : mesh.indices)
+    assert(i < mesh.vertex_count() && "NodeMesh: index out of range");
+  append_index_bytes(out, mesh.indices, index_bytes_for(mesh.vertex_count()));
   detail::append_le(out, crc32(out));
   return out;
 }
@@ -151,6 +168,118 @@ Status write_node_file(const std::filesystem::path& path, const NodeMesh& mesh) 
     return io_error(path.string() + ": write failed: " + std::strerror(write_errno));
   }
   return {};
+}
+
+namespace {
+constexpr std::size_t kWriterBufferBytes = std::size_t{1} << 20;
+}  // namespace
+
+Result<NodeFileWriter> NodeFileWriter::create(const std::filesystem::path& path,
+                                              VertexLayout layout, std::uint32_t vertex_count,
+                                              std::uint32_t index_count, const Bounds& bounds) {
+  NodeFileWriter writer;
+  writer.fd_ = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  if (writer.fd_ < 0) return io_error(path.string() + ": cannot create: " + std::strerror(errno));
+  writer.path_ = path;
+  writer.stride_ = layout.floats();
+  writer.index_bytes_ = index_bytes_for(vertex_count);
+  writer.vertices_left_ = std::uint64_t{vertex_count} * writer.stride_;
+  writer.indices_left_ = index_count;
+  writer.buffer_.reserve(kWriterBufferBytes);
+  append_header(writer.buffer_, layout, vertex_count, index_count, bounds);
+  return writer;
+}
+
+NodeFileWriter::NodeFileWriter(NodeFileWriter&& other) noexcept { *this = std::move(other); }
+
+NodeFileWriter& NodeFileWriter::operator=(NodeFileWriter&& other) noexcept {
+  if (this == &other) return *this;
+  abandon();
+  path_ = std::move(other.path_);
+  fd_ = std::exchange(other.fd_, -1);
+  stride_ = other.stride_;
+  index_bytes_ = other.index_bytes_;
+  vertices_left_ = other.vertices_left_;
+  indices_left_ = other.indices_left_;
+  crc_ = other.crc_;
+  written_ = other.written_;
+  buffer_ = std::move(other.buffer_);
+  return *this;
+}
+
+NodeFileWriter::~NodeFileWriter() { abandon(); }
+
+void NodeFileWriter::abandon() {
+  if (fd_ < 0) return;
+  ::close(std::exchange(fd_, -1));
+  std::error_code ignored;
+  std::filesystem::remove(path_, ignored);
+}
+
+Status NodeFileWriter::write_buffer() {
+  std::size_t done = 0;
+  while (done < buffer_.size()) {
+    const ssize_t n = ::write(fd_, buffer_.data() + done, buffer_.size() - done);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) {
+      const int error = n < 0 ? errno : EIO;
+      abandon();
+      return io_error(path_.string() + ": write failed: " + std::strerror(error));
+    }
+    done += static_cast<std::size_t>(n);
+  }
+  written_ += buffer_.size();
+  buffer_.clear();
+  return {};
+}
+
+Status NodeFileWriter::flush() {
+  crc_ = crc32(buffer_, crc_);
+  return write_buffer();
+}
+
+Status NodeFileWriter::append_vertices(std::span<const float> vertices) {
+  assert(fd_ >= 0 && "NodeFileWriter: used after an error or finish()");
+  assert(vertices.size() % stride_ == 0 && vertices.size() <= vertices_left_ &&
+         "NodeFileWriter: partial vertex or more vertices than declared");
+  vertices_left_ -= vertices.size();
+  const auto* bytes = reinterpret_cast<const std::byte*>(vertices.data());
+  for (std::size_t done = 0; done < vertices.size_bytes();) {
+    if (buffer_.size() >= kWriterBufferBytes) OCTOLOD_RETURN_IF_ERROR(flush());
+    const std::size_t n = std::min(vertices.size_bytes() - done, kWriterBufferBytes - buffer_.size());
+    buffer_.insert(buffer_.end(), bytes + done, bytes + done + n);
+    done += n;
+  }
+  return {};
+}
+
+Status NodeFileWriter::append_indices(std::span<const std::uint32_t> indices) {
+  assert(fd_ >= 0 && "NodeFileWriter: used after an error or finish()");
+  assert(vertices_left_ == 0 && indices.size() <= indices_left_ &&
+         "NodeFileWriter: indices before the last vertex or more than declared");
+  indices_left_ -= indices.size();
+  constexpr std::size_t kBlock = kWriterBufferBytes / 8;  // indices appended between flushes
+  for (std::size_t done = 0; done < indices.size(); done += kBlock) {
+    if (buffer_.size() + kBlock * index_bytes_ > kWriterBufferBytes) OCTOLOD_RETURN_IF_ERROR(flush());
+    append_index_bytes(buffer_, indices.subspan(done, std::min(kBlock, indices.size() - done)),
+                       index_bytes_);
+  }
+  return {};
+}
+
+Result<std::uint64_t> NodeFileWriter::finish() {
+  assert(fd_ >= 0 && "NodeFileWriter: used after an error or finish()");
+  assert(vertices_left_ == 0 && indices_left_ == 0 && "NodeFileWriter: fewer items than declared");
+  OCTOLOD_RETURN_IF_ERROR(flush());
+  detail::append_le(buffer_, crc_);  // the checksum covers everything before it
+  OCTOLOD_RETURN_IF_ERROR(write_buffer());
+  if (::close(std::exchange(fd_, -1)) != 0) {
+    const int error = errno;
+    std::error_code ignored;
+    std::filesystem::remove(path_, ignored);
+    return io_error(path_.string() + ": write failed: " + std::strerror(error));
+  }
+  return written_;
 }
 
 Result<NodeMesh> read_node_file(const std::filesystem::path& path) {

@@ -47,6 +47,46 @@ Result<NodeMesh> decode_node_file(std::span<const std::byte> bytes, std::string_
 Status write_node_file(const std::filesystem::path& path, const NodeMesh& mesh);
 Result<NodeMesh> read_node_file(const std::filesystem::path& path);
 
+// Writes a node file piece by piece, for a mesh too large to hold at once (a streamed octree
+// leaf): the counts and bounds up front, then every vertex, then every index, in order. The
+// bytes equal write_node_file's for the same mesh (bounds = the mesh's, or all zero when it has
+// no vertex). Memory: one buffer of at most 1 MiB. Not thread-safe; one writer per file.
+class NodeFileWriter {
+ public:
+  // Creates (truncates) `path`. io error naming the path when the system refuses.
+  static Result<NodeFileWriter> create(const std::filesystem::path& path, VertexLayout layout,
+                                       std::uint32_t vertex_count, std::uint32_t index_count,
+                                       const Bounds& bounds);
+  NodeFileWriter(NodeFileWriter&& other) noexcept;
+  NodeFileWriter& operator=(NodeFileWriter&& other) noexcept;
+  NodeFileWriter(const NodeFileWriter&) = delete;
+  NodeFileWriter& operator=(const NodeFileWriter&) = delete;
+  ~NodeFileWriter();  // an unfinished file is removed
+
+  // Whole vertices (layout.floats() floats each); asserted not to pass vertex_count.
+  Status append_vertices(std::span<const float> vertices);
+  // After every vertex: indices (each < vertex_count); asserted not to pass index_count.
+  Status append_indices(std::span<const std::uint32_t> indices);
+  // After every index: the checksum, then closes. The file's size in bytes.
+  Result<std::uint64_t> finish();
+
+ private:
+  NodeFileWriter() = default;
+  Status flush();         // buffer into the checksum, then written
+  Status write_buffer();  // on error the file is abandoned
+  void abandon();         // closes and removes an unfinished file
+
+  std::filesystem::path path_;
+  int fd_ = -1;
+  std::size_t stride_ = 0;
+  std::uint32_t index_bytes_ = 0;
+  std::uint64_t vertices_left_ = 0;  // floats
+  std::uint64_t indices_left_ = 0;
+  std::uint32_t crc_ = 0;
+  std::uint64_t written_ = 0;
+  std::vector<std::byte> buffer_;
+};
+
 // CRC-32 (IEEE 802.3, reflected, as zlib's crc32) of `bytes`, continuing from `crc`.
 std::uint32_t crc32(std::span<const std::byte> bytes, std::uint32_t crc = 0);
 
