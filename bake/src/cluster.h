@@ -3,6 +3,7 @@
 // (cluster_grid.cpp), both on a node prepared once (welded, boundary found).
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <cstddef>
 #include <cstdint>
@@ -21,6 +22,50 @@ struct PreparedNode {
   Bounds cell;                    // the node's octree cell, model units
   Bounds mesh_bounds;             // tight bounds of mesh
   std::array<double, 3> origin;   // cell centre: the local origin of the quadric arithmetic
+};
+
+// A uniform grid of cubic cells over a clustering domain: the node's cell extended by the
+// bounds of its triangles (which stick out of the cell: they are assigned by centroid), in local
+// coordinates (model units relative to an origin, the cell centre).
+struct GridDomain {
+  std::array<double, 3> min;
+  std::array<double, 3> max;
+  double cell_size;                    // side / g
+  std::array<std::uint32_t, 3> dims;   // cells per axis, at most g
+};
+// g cells along the domain's longest side (g >= 1).
+GridDomain make_grid_domain(const Bounds& cell, const Bounds& mesh_bounds,
+                            const std::array<double, 3>& origin, std::uint32_t g);
+// The box of the cell with linear index `key` (GridCellKeys), cut to the domain.
+ClampBox grid_cell_box(const GridDomain& grid, std::uint64_t key);
+
+// Linear cell index (x major) of model-unit positions in a GridDomain, clamped to the grid.
+class GridCellKeys {
+ public:
+  GridCellKeys(const GridDomain& grid, const std::array<double, 3>& origin) : dims_(grid.dims) {
+    inverse_size_ = 1.0 / grid.cell_size;
+    for (std::size_t i = 0; i < 3; ++i) {
+      start_[i] = origin[i] + grid.min[i];
+      last_cell_[i] = static_cast<double>(grid.dims[i] - 1);
+    }
+  }
+  // cell along axis i = floor((x - origin - min) / size), from the model-unit float x, clamped
+  // to the grid; truncation is the floor once negatives are clamped (and no libm call, which
+  // std::floor is without SSE4.1)
+  std::uint64_t key(const float* position) const {
+    std::uint64_t key = 0;
+    for (std::size_t i = 0; i < 3; ++i) {
+      const double cell = (static_cast<double>(position[i]) - start_[i]) * inverse_size_;
+      key = key * dims_[i] + static_cast<std::uint32_t>(cell > 0.0 ? std::min(cell, last_cell_[i]) : 0.0);
+    }
+    return key;
+  }
+
+ private:
+  std::array<std::uint32_t, 3> dims_;
+  std::array<double, 3> start_;
+  std::array<double, 3> last_cell_;
+  double inverse_size_;
 };
 
 // `mesh` must be valid (indices in range, finite positions); checked by simplify_node.

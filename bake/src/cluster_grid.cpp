@@ -38,21 +38,21 @@ constexpr int kHalvingSearchSteps = 6;
 // 0.15 with 2 coarse cells and a few halved ones.
 constexpr std::uint32_t kMinAdaptiveResolution = 8;
 
-struct GridDomain {
-  std::array<double, 3> min;  // local coordinates (relative to PreparedNode::origin)
-  std::array<double, 3> max;
-  double cell_size;
-  std::array<std::uint32_t, 3> dims;
-};
-
 GridDomain make_domain(const PreparedNode& node, std::uint32_t g) {
-  Bounds domain = node.cell;
-  if (!node.mesh_bounds.empty()) domain.extend(node.mesh_bounds);
+  return make_grid_domain(node.cell, node.mesh_bounds, node.origin, g);
+}
+
+}  // namespace
+
+GridDomain make_grid_domain(const Bounds& cell, const Bounds& mesh_bounds,
+                            const std::array<double, 3>& origin, std::uint32_t g) {
+  Bounds domain = cell;
+  if (!mesh_bounds.empty()) domain.extend(mesh_bounds);
   GridDomain grid{};
   double side = 0.0;
   for (std::size_t i = 0; i < 3; ++i) {
-    grid.min[i] = static_cast<double>(domain.min[i]) - node.origin[i];
-    grid.max[i] = static_cast<double>(domain.max[i]) - node.origin[i];
+    grid.min[i] = static_cast<double>(domain.min[i]) - origin[i];
+    grid.max[i] = static_cast<double>(domain.max[i]) - origin[i];
     side = std::max(side, static_cast<double>(domain.max[i]) - domain.min[i]);
   }
   grid.cell_size = side > 0.0 ? side / g : 1.0;
@@ -63,6 +63,20 @@ GridDomain make_domain(const PreparedNode& node, std::uint32_t g) {
   }
   return grid;
 }
+
+ClampBox grid_cell_box(const GridDomain& grid, std::uint64_t key) {
+  ClampBox box;
+  for (std::size_t i = 3; i-- > 0;) {
+    const auto index = static_cast<double>(key % grid.dims[i]);
+    key /= grid.dims[i];
+    // the cubic cell, cut to the domain (the last cell along an axis may stick out of it)
+    box.min[i] = grid.min[i] + index * grid.cell_size;
+    box.max[i] = std::min(grid.min[i] + (index + 1.0) * grid.cell_size, grid.max[i]);
+  }
+  return box;
+}
+
+namespace {
 
 // The grid of `coarse` with every cell halved along each axis (same origin: every fine cell lies
 // in one coarse cell).
@@ -79,29 +93,12 @@ GridDomain halved(const GridDomain& coarse) {
 // Cluster key of every vertex: the linear cell index, or kLockedKey | position id.
 std::vector<std::uint64_t> vertex_keys(const PreparedNode& node, const GridDomain& grid) {
   const std::size_t stride = node.mesh.layout.floats();
-  const double inverse_size = 1.0 / grid.cell_size;
-  // cell along axis i = floor((x - origin - min) / size), from the model-unit float x, clamped
-  // to the grid; truncation is the floor once negatives are clamped (and no libm call, which
-  // std::floor is without SSE4.1)
-  std::array<double, 3> start;
-  std::array<double, 3> last_cell;
-  for (std::size_t i = 0; i < 3; ++i) {
-    start[i] = node.origin[i] + grid.min[i];
-    last_cell[i] = static_cast<double>(grid.dims[i] - 1);
-  }
+  const GridCellKeys cell_keys(grid, node.origin);
   std::vector<std::uint64_t> keys(node.mesh.vertex_count());
   for (std::size_t v = 0; v < keys.size(); ++v) {
     const std::uint32_t position = node.positions.of_vertex[v];
-    if (node.boundary.locked_position[position]) {
-      keys[v] = kLockedKey | position;
-      continue;
-    }
-    std::uint64_t key = 0;
-    for (std::size_t i = 0; i < 3; ++i) {
-      const double cell = (static_cast<double>(node.mesh.vertices[v * stride + i]) - start[i]) * inverse_size;
-      key = key * grid.dims[i] + static_cast<std::uint32_t>(cell > 0.0 ? std::min(cell, last_cell[i]) : 0.0);
-    }
-    keys[v] = key;
+    keys[v] = node.boundary.locked_position[position] ? kLockedKey | position
+                                                      : cell_keys.key(&node.mesh.vertices[v * stride]);
   }
   return keys;
 }
@@ -165,22 +162,15 @@ std::size_t coarsest_count_bound(const PreparedNode& node) {
 // triangles whose corners coincide after rounding): parity per cluster triple, the number of
 // triples seen an odd number of times (build_clustered_mesh's rule), without solving any quadric.
 std::size_t count_kept_triangles(const PreparedNode& node, const std::vector<std::uint32_t>& cluster) {
-  FlatHashMap<3> parity(node.mesh.triangle_count());
-  std::vector<std::uint8_t> odd;
-  std::size_t count = 0;
+  OddKeyCounter<3> parity(node.mesh.triangle_count());
   for (std::size_t t = 0; t < node.mesh.triangle_count(); ++t) {
     std::array<std::uint32_t, 3> triple{cluster[node.mesh.indices[3 * t]], cluster[node.mesh.indices[3 * t + 1]],
                                         cluster[node.mesh.indices[3 * t + 2]]};
     std::sort(triple.begin(), triple.end());
     if (triple[0] == triple[1] || triple[1] == triple[2]) continue;
-    bool inserted = false;
-    const std::uint32_t index = parity.find_or_insert(triple, static_cast<std::uint32_t>(odd.size()), inserted);
-    if (inserted) odd.push_back(0);
-    odd[index] ^= 1u;
-    if (odd[index]) ++count;
-    else --count;
+    parity.toggle(triple);
   }
-  return count;
+  return parity.odd();
 }
 
 // The clustering of per-vertex keys of `coarse` (and of `fine` where kFineKey is set): clusters
@@ -197,15 +187,7 @@ Clustering clustering_from_keys(const std::vector<std::uint64_t>& keys, const Gr
     const std::uint64_t key = distinct[c];
     clustering.locked[c] = (key & kLockedKey) != 0;
     if (clustering.locked[c]) continue;
-    const GridDomain& grid = key & kFineKey ? fine : coarse;
-    std::uint64_t rest = key & ~kFineKey;
-    for (std::size_t i = 3; i-- > 0;) {
-      const auto index = static_cast<double>(rest % grid.dims[i]);
-      rest /= grid.dims[i];
-      // the cubic cell, cut to the domain (the last cell along an axis may stick out of it)
-      clustering.box[c].min[i] = grid.min[i] + index * grid.cell_size;
-      clustering.box[c].max[i] = std::min(grid.min[i] + (index + 1.0) * grid.cell_size, grid.max[i]);
-    }
+    clustering.box[c] = grid_cell_box(key & kFineKey ? fine : coarse, key & ~kFineKey);
   }
   return clustering;
 }

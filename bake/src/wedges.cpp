@@ -181,6 +181,13 @@ void finish_attributes(VertexLayout layout, const double* fallback_normal, doubl
   }
 }
 
+void place_representative(const double* quadric, const double* mean, const ClampBox& box,
+                          const double* best_vertex, double* x) {
+  minimize_quadric(3, quadric, mean, x);
+  pull_into_box(mean, box, x);
+  if (best_vertex[3] < evaluate_quadric(3, quadric, x)) std::copy(best_vertex, best_vertex + 3, x);
+}
+
 ClusteredMesh build_clustered_mesh(const NodeMesh& mesh, const Clustering& clustering,
                                    const std::array<double, 3>& origin) {
   const VertexLayout layout = mesh.layout;
@@ -288,12 +295,8 @@ ClusteredMesh build_clustered_mesh(const NodeMesh& mesh, const Clustering& clust
     if (clustering.locked[c] || cluster_vertices[c] <= 1) continue;
     double mean[3];
     for (int i = 0; i < 3; ++i) mean[i] = cluster_sum[c * 3 + static_cast<std::size_t>(i)] / cluster_vertices[c];
-    double* x = &cluster_position[c * 3];
-    const double* quadric = &cluster_quadric[c * q3];
-    minimize_quadric(3, quadric, mean, x);
-    pull_into_box(mean, clustering.box[c], x);
-    const double* best = &vertex_candidate[c * 4];
-    if (best[3] < evaluate_quadric(3, quadric, x)) std::copy(best, best + 3, x);
+    place_representative(&cluster_quadric[c * q3], mean, clustering.box[c], &vertex_candidate[c * 4],
+                         &cluster_position[c * 3]);
   }
 
   // attribute quadrics, once the positions are known: every triangle's generalized quadric

@@ -39,6 +39,15 @@ struct Clustering {
   std::vector<ClampBox> box;
 };
 
+// The position of an unlocked cluster (local coordinates, as its n = 3 position `quadric`):
+// the quadric's minimizer nearest to `mean` (the cluster's mean), pulled into `box` along the
+// segment from the mean when it falls outside (a fold or a crease inside the cell: the planes
+// meet far away), unless `best_vertex` (a position of one of the cluster's own vertices, which
+// lie on the input surface, then its quadric error; error +infinity for none) has a lower
+// quadric error than that point.
+void place_representative(const double* quadric, const double* mean, const ClampBox& box,
+                          const double* best_vertex, double* x);
+
 // Builds the clustered mesh. `origin` (model units) is subtracted from positions for the quadric
 // arithmetic; clamp boxes are relative to it. Triangles: a triangle survives when its corners are
 // in three distinct clusters; the surviving triangles are counted per cluster triple and kept
