@@ -19,6 +19,7 @@
 #include <fstream>
 #include <iterator>
 #include <map>
+#include <optional>
 #include <string>
 #include <thread>
 #include <vector>
@@ -86,6 +87,7 @@ class BakeTest : public ::testing::Test {
     }
     return found;
   }
+  void expect_leaves_hold_exactly_the_input_triangles(std::uint64_t budget) const;
   void expect_no_temp_files() const {
     EXPECT_EQ(temp_entries(dir_), std::vector<std::string>{});
     EXPECT_EQ(temp_entries(work()), std::vector<std::string>{});
@@ -172,12 +174,20 @@ bool inside(const Bounds& outer, const Bounds& inner) {
   return true;
 }
 
+// At 26 MiB every leaf is built in memory; at 16 MiB the largest ones (up to 3009 triangles,
+// over 16 MiB's max_depth_leaf_triangles) are built streaming.
 TEST_F(BakeTest, LeavesHoldExactlyTheInputTrianglesInAConsistentTree) {
+  for (const std::uint64_t budget : {std::uint64_t{26} << 20, std::uint64_t{16} << 20}) {
+    SCOPED_TRACE(budget >> 20);
+    expect_leaves_hold_exactly_the_input_triangles(budget);
+  }
+}
+
+void BakeTest::expect_leaves_hold_exactly_the_input_triangles(std::uint64_t budget) const {
   BakeOptions o = options("out");
   o.max_tris = 700;
   o.max_depth = 2;  // shallow enough that some leaves at max depth exceed max_tris
-  // Its largest leaf (3009 triangles) needs more than 16 MiB's max_depth_leaf_triangles.
-  o.memory_budget_bytes = 26 << 20;
+  o.memory_budget_bytes = budget;
   auto baked = bake(o);
   ASSERT_TRUE(baked.ok()) << baked.status().message();
   auto manifest = read_manifest(path("out") / "manifest.json");
@@ -192,6 +202,7 @@ TEST_F(BakeTest, LeavesHoldExactlyTheInputTrianglesInAConsistentTree) {
 
   std::vector<Triangle> found;
   bool some_leaf_over_max = false;
+  bool some_leaf_over_cap = false;
   for (const NodeInfo& n : m.nodes) {
     if (n.parent >= 0) {
       const NodeInfo& p = m.nodes[static_cast<std::size_t>(n.parent)];
@@ -212,6 +223,8 @@ TEST_F(BakeTest, LeavesHoldExactlyTheInputTrianglesInAConsistentTree) {
     }
     EXPECT_TRUE(n.source_triangles <= o.max_tris || n.depth == o.max_depth) << n.path;
     some_leaf_over_max = some_leaf_over_max || n.source_triangles > o.max_tris;
+    some_leaf_over_cap = some_leaf_over_cap ||
+                         n.source_triangles > max_depth_leaf_triangles(budget, layout);
     ASSERT_GE(n.lods.size(), 1u);
     EXPECT_EQ(n.lods[0].error, 0.0);
     EXPECT_EQ(n.lods[0].file, (n.path.empty() ? "" : n.path + "/") + "lod0.olod");
@@ -236,6 +249,7 @@ TEST_F(BakeTest, LeavesHoldExactlyTheInputTrianglesInAConsistentTree) {
     }
   }
   EXPECT_TRUE(some_leaf_over_max) << "the test wants a leaf at max depth over max_tris";
+  EXPECT_EQ(some_leaf_over_cap, budget < (std::uint64_t{26} << 20));
   EXPECT_EQ(m.nodes[0].source_triangles, expected.size());
   EXPECT_EQ(m.bounds, m.nodes[0].bounds);
   // Same multiset of triangles, attributes and winding included.
@@ -256,11 +270,12 @@ std::uint64_t budget_for_leaf(std::uint64_t triangles, VertexLayout layout) {
   return low;
 }
 
-// max_depth 2 leaves the 60K rock's largest leaf at max depth with thousands of triangles: a
-// budget whose cap is one triangle short refuses the bake, naming that leaf (the first such in
-// key order), on the records path and on the in-memory octree alike, publishes nothing and
-// keeps the earlier bake; the budget whose cap it just reaches bakes it.
-TEST_F(BakeTest, LeafAtMaxDepthOverTheBudgetsCapIsRefusedAndKeepsTheEarlierBake) {
+// max_depth 2 leaves the 60K rock's largest leaf at max depth with thousands of triangles: under
+// the budget whose cap is one triangle short it is built streaming, on the records path and on
+// the in-memory octree alike, with the same tree, the same triangles in that leaf's LOD 0 (in
+// the same order) and the same files everywhere else; the budget whose cap it just reaches
+// bakes the same manifest as a large budget.
+TEST_F(BakeTest, LeafAtMaxDepthOverTheBudgetsCapIsStreamedIntoTheSameTree) {
   BakeOptions o = options("out");
   o.max_tris = 700;
   o.max_depth = 2;
@@ -274,24 +289,46 @@ TEST_F(BakeTest, LeafAtMaxDepthOverTheBudgetsCapIsRefusedAndKeepsTheEarlierBake)
     if (n.is_leaf() && (!largest || n.source_triangles > largest->source_triangles)) largest = &n;
   ASSERT_TRUE(largest && largest->depth == 2 && largest->source_triangles > o.max_tris + 1);
   const std::uint64_t fits = budget_for_leaf(largest->source_triangles, earlier->manifest.layout);
+  auto lod0 = [](const fs::path& tree, const NodeInfo& n) {
+    auto mesh = read_node_file(tree / n.lods[0].file);
+    EXPECT_TRUE(mesh.ok()) << mesh.status().message();
+    return mesh.ok() ? mesh_triangles(mesh.value()) : std::vector<Triangle>{};
+  };
+  const std::vector<Triangle> largest_triangles = lod0(path("out"), *largest);
 
   o.memory_budget_bytes = fits - 1;
+  std::optional<Manifest> first;
   for (bool in_memory : {true, false}) {
     o.in_memory_octree = in_memory;
-    auto refused = bake(o);
-    ASSERT_FALSE(refused.ok());
-    EXPECT_EQ(refused.status().code(), ErrorCode::usage);
-    const std::string& message = refused.status().message();
-    EXPECT_NE(message.find("octree cell " + largest->path + " at --max-depth 2 holds more than " +
-                           std::to_string(largest->source_triangles - 1) + " triangles"),
-              std::string::npos)
-        << message;
-    EXPECT_NE(message.find("raise --max-depth"), std::string::npos) << message;
-    EXPECT_TRUE(tree_files(path("out")) == before);
+    o.output = path(in_memory ? "in-memory" : "records");
+    auto streamed = bake(o);
+    ASSERT_TRUE(streamed.ok()) << streamed.status().message();
+    const Manifest& m = streamed->manifest;
+    ASSERT_EQ(m.nodes.size(), earlier->manifest.nodes.size());
+    std::size_t changed = 0;
+    for (std::size_t i = 0; i < m.nodes.size(); ++i) {
+      const NodeInfo& n = m.nodes[i];
+      EXPECT_EQ(n.path, earlier->manifest.nodes[i].path);
+      EXPECT_EQ(n.source_triangles, earlier->manifest.nodes[i].source_triangles);
+      if (!n.is_leaf()) continue;
+      ASSERT_EQ(n.lods.size(), 1u);
+      if (n.source_triangles < largest->source_triangles) {
+        EXPECT_EQ(read_bytes(o.output / n.lods[0].file), before.at(n.lods[0].file)) << n.path;
+        continue;
+      }
+      ++changed;
+      EXPECT_TRUE(lod0(o.output, n) == largest_triangles) << n.path;
+    }
+    EXPECT_EQ(changed, 1u);
+    if (first) {
+      EXPECT_EQ(manifest_to_json(without_run_details(m)), manifest_to_json(without_run_details(*first)));
+    }
+    first = m;
     expect_no_temp_files();
   }
 
   o.memory_budget_bytes = fits;
+  o.output = path("out");
   auto baked = bake(o);
   ASSERT_TRUE(baked.ok()) << baked.status().message();
   EXPECT_EQ(manifest_to_json(without_run_details(baked->manifest)),
@@ -587,16 +624,21 @@ TEST_F(BakeTest, CliExitCodesForWriteFailureBadInputAndUnwritableOutput) {
   EXPECT_EQ(WEXITSTATUS(status), 4);
 }
 
-// The 60K rock in one root leaf, far over the cap of --memory 4M: exit 1 (usage), nothing
-// published, no temporary file.
-TEST_F(BakeTest, CliExitsWithUsageWhenALeafAtMaxDepthIsOverTheCap) {
+// The 60K rock in one root leaf, far over the cap of --memory 4M: built streaming (exit 0), a
+// root whose LOD 1 fits the in-memory cap, no temporary file left.
+TEST_F(BakeTest, CliBakesALeafAtMaxDepthOverTheCapStreaming) {
   ASSERT_NE(cli_path(), nullptr);
   std::vector<std::string> args = bake_args(small_ply(), path("out"), work());
   args.insert(args.end(), {"--max-depth", "0"});
   const int status = wait_status(spawn_cli(args));
   ASSERT_TRUE(WIFEXITED(status));
-  EXPECT_EQ(WEXITSTATUS(status), 1);
-  EXPECT_FALSE(fs::exists(path("out")));
+  EXPECT_EQ(WEXITSTATUS(status), 0);
+  auto m = read_manifest(path("out") / "manifest.json");
+  ASSERT_TRUE(m.ok()) << m.status().message();
+  ASSERT_EQ(m->nodes.size(), 1u);
+  EXPECT_EQ(m->nodes[0].lods[0].triangles, m->input_triangles);
+  ASSERT_GE(m->nodes[0].lods.size(), 2u);
+  EXPECT_LE(m->nodes[0].lods[1].triangles, 501u);  // --max-tris 500 + 1: over 4M's cap
   expect_no_temp_files();
 }
 

@@ -434,5 +434,100 @@ TEST_F(LodTreeTest, StoredErrorsBoundTheDistanceFromTheOriginalTriangles) {
               diagonal);
 }
 
+// --- streamed leaves ---
+
+// Every triangle of `mesh` as its three vertex records, in the mesh's order.
+std::vector<std::vector<float>> triangle_records(const NodeMesh& mesh) {
+  const std::size_t stride = mesh.layout.floats();
+  std::vector<std::vector<float>> triangles(mesh.triangle_count());
+  for (std::size_t t = 0; t < triangles.size(); ++t)
+    for (std::size_t c = 0; c < 3; ++c) {
+      const float* v = &mesh.vertices[mesh.indices[3 * t + c] * stride];
+      triangles[t].insert(triangles[t].end(), v, v + stride);
+    }
+  return triangles;
+}
+
+// At --max-depth 0 and 1 under a small budget every leaf is over the in-memory cap and is built
+// streaming: LOD 0 holds exactly the leaf's triangles (those of the same leaf baked in memory
+// under a large budget, in the same order), LOD 1 at most the cap and half the leaf, every
+// stored error bounds the measured distance from the leaf's triangles, and random cuts mixing
+// streamed leaves with their neighbours and parents add no open edge (at depth 0, every LOD
+// of the root is closed).
+TEST_F(LodTreeTest, LeavesOverTheCapAreStreamedWithinItAndStayCrackFreeAndBounded) {
+  for (const std::uint32_t depth : {0u, 1u}) {
+    BakeOptions o = options(rock_ply(), "streamed-" + std::to_string(depth));
+    o.max_depth = depth;
+    o.memory_budget_bytes = 6 << 20;
+    const LoadedTree t = bake_and_load(o);
+    BakeOptions in_memory = o;
+    in_memory.output = root_ / ("in-memory-" + std::to_string(depth));
+    in_memory.memory_budget_bytes = std::uint64_t{256} << 20;
+    const LoadedTree r = bake_and_load(in_memory);
+    const Manifest& m = t.manifest;
+    ASSERT_EQ(m.nodes.size(), r.manifest.nodes.size());
+    const std::uint64_t cap = std::max<std::uint64_t>(
+        max_depth_leaf_triangles(o.memory_budget_bytes, m.layout), o.max_tris + 1ull);
+    ASSERT_LT(cap, max_depth_leaf_triangles(in_memory.memory_budget_bytes, m.layout));
+    const double diagonal = std::sqrt(
+        std::pow(m.bounds.max[0] - m.bounds.min[0], 2.0) + std::pow(m.bounds.max[1] - m.bounds.min[1], 2.0) +
+        std::pow(m.bounds.max[2] - m.bounds.min[2], 2.0));
+    std::size_t streamed = 0;
+    for (std::size_t i = 0; i < m.nodes.size(); ++i) {
+      const NodeInfo& n = m.nodes[i];
+      if (!n.is_leaf()) continue;
+      ASSERT_GT(n.source_triangles, cap) << n.path;
+      ++streamed;
+      EXPECT_TRUE(triangle_records(t.lods[i][0]) == triangle_records(r.lods[i][0])) << n.path;
+      EXPECT_EQ(n.lods[0].triangles, n.source_triangles);
+      EXPECT_EQ(n.lods[0].error, 0.0);
+      ASSERT_GE(n.lods.size(), 2u) << n.path;
+      EXPECT_LE(n.lods[1].triangles, cap) << n.path;
+      EXPECT_LE(n.lods[1].triangles, n.source_triangles / 2) << n.path;
+      std::vector<glm::vec3> samples;
+      surface_samples(t.lods[i][0], samples);
+      for (std::size_t k = 1; k < n.lods.size(); ++k) {
+        const NodeMesh& lod = t.lods[i][k];
+        EXPECT_EQ(lod.triangle_count(), n.lods[k].triangles);
+        const measure::TriangleBvh bvh(lod.vertices, lod.layout.floats(), lod.indices);
+        const double bound = n.lods[k].error + diagonal * 1e-6;
+        std::size_t violations = 0;
+        for (const glm::vec3& p : samples) violations += !bvh.closest(p, static_cast<float>(bound)).found();
+        EXPECT_EQ(violations, 0u) << n.path << " LOD " << k << " error " << n.lods[k].error;
+      }
+      EXPECT_LT(n.lods[1].error, 0.1 * diagonal) << n.path;
+    }
+    EXPECT_EQ(streamed, depth == 0 ? 1u : 8u);
+    if (depth == 0) {  // one node: every LOD is a cut
+      for (const NodeMesh& lod : t.lods[0]) EXPECT_TRUE(open_edges({&lod}).empty());
+    } else {
+      expect_random_cuts_add_no_open_edge(t, true);
+    }
+  }
+}
+
+// A streamed leaf's files depend only on the input and the budget: the same with 1 and 2
+// threads and from the records path (no in-memory octree).
+TEST_F(LodTreeTest, StreamedLeavesAreTheSameForAnyThreadCountAndOctreePath) {
+  BakeOptions one = options(rock_ply(), "streamed-one");
+  one.max_depth = 1;
+  one.memory_budget_bytes = 6 << 20;
+  one.threads = 1;
+  BakeOptions two = one;
+  two.output = root_ / "streamed-two";
+  two.threads = 2;
+  two.in_memory_octree = false;
+  const LoadedTree a = bake_and_load(one);
+  const LoadedTree b = bake_and_load(two);
+  ASSERT_EQ(a.manifest.nodes.size(), b.manifest.nodes.size());
+  for (std::size_t i = 0; i < a.manifest.nodes.size(); ++i) {
+    ASSERT_EQ(a.lods[i].size(), b.lods[i].size()) << a.manifest.nodes[i].path;
+    for (std::size_t k = 0; k < a.lods[i].size(); ++k) {
+      EXPECT_TRUE(a.lods[i][k] == b.lods[i][k]) << a.manifest.nodes[i].path << " LOD " << k;
+      EXPECT_EQ(a.manifest.nodes[i].lods[k].error, b.manifest.nodes[i].lods[k].error);
+    }
+  }
+}
+
 }  // namespace
 }  // namespace octolod::bake

@@ -4,6 +4,7 @@
 
 #include <cstring>
 #include <map>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -152,64 +153,86 @@ TEST(OctreeBuilder, LeavesAtMaxDepthKeepEverything) {
   EXPECT_EQ(t.leaves.at(3), std::vector<std::uint64_t>{10});
 }
 
-// A leaf at max depth over its cap: the build ends in the push that brings the record past
-// the cap, with the cap's error for that cell, and the cell is never handed out. Records in
-// 1/2: 10 (max_tris 3, max_depth 2), then one in 1/3.
-TEST(OctreeBuilder, LeafAtMaxDepthOverTheCapIsRefusedWithItsCell) {
+// Ids of 8-byte Stream records.
+std::vector<std::uint64_t> record_ids(std::span<const std::byte> records) {
+  std::vector<std::uint64_t> ids(records.size() / 8);
+  std::memcpy(ids.data(), records.data(), records.size());
+  return ids;
+}
+
+// A leaf at max depth over its cap goes to the spill: its buffered records, then every later
+// record of its cell, in stream order, and finish() once the stream leaves the cell; the tree is
+// the same as without a cap. Records in 1/2: 10 (max_tris 3, max_depth 2; ids 9..0, so stream
+// order is not id order), then one in 1/3.
+TEST(OctreeBuilder, LeafAtMaxDepthOverTheCapGoesToTheSpillInStreamOrder) {
   Stream s;
-  for (int i = 0; i < 10; ++i) s.add(012u);
+  for (int i = 0; i < 10; ++i) s.add(012u, 9 - static_cast<std::uint64_t>(i));
   s.add(013u);
   for (std::uint64_t cap : {9u, 10u}) {
     for (std::size_t batch : {1u, 4u, 100u}) {
       std::vector<std::int32_t> handed_out;
-      std::vector<std::string> refused;
+      std::vector<std::uint64_t> spilled;
+      std::vector<std::string> finished;
+      OctreeBuilder* builder_ptr = nullptr;
       OctreeBuilder builder(
           3, 2, 8, 0,
           [&](std::int32_t node, std::vector<std::byte>&&) {
             handed_out.push_back(node);
             return Status{};
           },
-          {cap, [&](const OctreeNode& node, std::uint64_t triangles) {
-             refused.push_back(node.path() + " depth " + std::to_string(node.depth) + " cap " +
-                               std::to_string(triangles));
-             return usage_error("too large");
+          {cap,
+           [&](const OctreeNode& node, std::span<const std::byte> records, std::size_t count) {
+             EXPECT_EQ(node.path(), "1/2");
+             EXPECT_EQ(records.size(), count * 8);
+             for (std::uint64_t id : record_ids(records)) spilled.push_back(id);
+             return Status{};
+           },
+           [&](std::int32_t node) {
+             const OctreeNode& n = builder_ptr->nodes()[static_cast<std::size_t>(node)];
+             finished.push_back(n.path() + " " + std::to_string(n.triangles) + (n.leaf ? " leaf" : ""));
+             return Status{};
            }});
+      builder_ptr = &builder;
       Status st;
       for (std::size_t i = 0; i < s.keys.size() && st.ok(); i += batch) {
         const std::size_t n = std::min(batch, s.keys.size() - i);
         st = builder.push(std::span(s.records).subspan(i * 8, n * 8),
                           std::span(s.keys).subspan(i, n));
       }
-      if (cap == 10) {  // exactly at the cap: the tree of LeavesAtMaxDepthKeepEverything
-        EXPECT_TRUE(st.ok() && builder.finish().ok());
-        EXPECT_TRUE(refused.empty());
+      ASSERT_TRUE(st.ok() && builder.finish().ok());
+      ASSERT_EQ(builder.nodes().size(), 4u);  // the tree of LeavesAtMaxDepthKeepEverything
+      EXPECT_EQ(builder.nodes()[2].triangles, 10u);
+      if (cap == 10) {  // exactly at the cap: in memory
+        EXPECT_TRUE(spilled.empty() && finished.empty());
         EXPECT_EQ(handed_out, (std::vector<std::int32_t>{2, 3}));
         continue;
       }
-      EXPECT_EQ(st.code(), ErrorCode::usage) << "batch " << batch;
-      EXPECT_EQ(refused, std::vector<std::string>{"1/2 depth 2 cap 9"}) << "batch " << batch;
-      EXPECT_TRUE(handed_out.empty());
+      EXPECT_EQ(spilled, (std::vector<std::uint64_t>{9, 8, 7, 6, 5, 4, 3, 2, 1, 0})) << "batch " << batch;
+      EXPECT_EQ(finished, std::vector<std::string>{"1/2 10 leaf"}) << "batch " << batch;
+      EXPECT_EQ(handed_out, (std::vector<std::int32_t>{3})) << "batch " << batch;
     }
   }
 }
 
-// max_tris + 1 triangles at max depth always pass (a split's last child may take them all):
-// a lower cap is raised to that.
+// max_tris + 1 triangles at max depth always stay in memory (a split's last child may take
+// them all): a lower cap is raised to that. An error of the spill ends the build.
 TEST(OctreeBuilder, LeafCapIsNeverBelowMaxTrisPlusOne) {
   Stream s;
   for (int i = 0; i < 5; ++i) s.add(010u);  // all in 1/0: root and 1 split at 4 records
-  std::vector<std::string> refused;
+  std::vector<std::string> spilled;
   OctreeBuilder builder(
       3, 2, 8, 0, [](std::int32_t, std::vector<std::byte>&&) { return Status{}; },
-      {2, [&](const OctreeNode& node, std::uint64_t triangles) {
-         refused.push_back(node.path() + " cap " + std::to_string(triangles));
-         return usage_error("too large");
-       }});
+      {2,
+       [&](const OctreeNode& node, std::span<const std::byte>, std::size_t count) {
+         spilled.push_back(node.path() + " " + std::to_string(count));
+         return io_error("disk full");
+       },
+       [](std::int32_t) { return Status{}; }});
   EXPECT_TRUE(builder.push(std::span(s.records).first(4 * 8), std::span(s.keys).first(4)).ok());
-  EXPECT_TRUE(refused.empty());
+  EXPECT_TRUE(spilled.empty());
   EXPECT_EQ(builder.push(std::span(s.records).subspan(4 * 8), std::span(s.keys).subspan(4)).code(),
-            ErrorCode::usage);
-  EXPECT_EQ(refused, std::vector<std::string>{"1/0 cap 4"});
+            ErrorCode::io);
+  EXPECT_EQ(spilled, std::vector<std::string>{"1/0 4"});
 }
 
 // Equal keys may arrive in any order (the soup's order depends on its path): a leaf hands

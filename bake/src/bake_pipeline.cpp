@@ -6,8 +6,8 @@
 
 #include <algorithm>
 #include <chrono>
-#include <cstdio>
 #include <cstring>
+#include <functional>
 #include <optional>
 #include <string>
 #include <system_error>
@@ -26,6 +26,7 @@
 #include "radix_sort.h"
 #include "peak_rss.h"
 #include "record_file.h"
+#include "streamed_leaf.h"
 #include "temp_dir.h"
 
 namespace octolod::bake {
@@ -94,12 +95,6 @@ Result<OctreeBudget> divide_octree_budget(const BakeOptions& options, VertexLayo
   return b;
 }
 
-std::string mib(std::uint64_t bytes) {
-  char text[32];
-  std::snprintf(text, sizeof text, "%.1f MiB", static_cast<double>(bytes) / (1 << 20));
-  return text;
-}
-
 // What a leaf costs in the LOD stage (lod_tree.h), per triangle, in soup records: the records,
 // the indexed NodeMesh, the simplifier's per-vertex quadrics and the LOD chain. Measured as the
 // slope of peak RSS (/usr/bin/time -v) between one leaf of 100K and one of 400K triangles
@@ -109,34 +104,19 @@ std::string mib(std::uint64_t bytes) {
 // half of that. The worst with some headroom: the cap must hold for any input.
 constexpr std::uint64_t kLeafCostInRecords = 16;
 // A leaf at max_depth, which cannot split, may cost up to 1 / kMaxDepthLeafShare of the budget
-// in the LOD stage. That share is not taken from the others (the octree sort keeps its own, and
-// with it the in-memory octree), so each such leaf in work (one per thread at most) may take
-// the bake up to that much above its usual peak: on the 1M city at --memory 33M, leaves of up
-// to 3968 triangles at --max-depth 4 (the cap: 3975) peaked at 52 to 66 MiB in three runs (66:
-// two at once), against 53 to 54 MiB at --max-depth 10; the 1M rock at --memory 29M, leaves of
-// up to 3473 at --max-depth 4 (cap 3494), 32 MiB as at --max-depth 10.
+// in the LOD stage: that many triangles (max_depth_leaf_triangles) are handed out in memory, a
+// larger leaf is spilled to a record file and built streaming in chunks of that many
+// (streamed_leaf.h: the chunk, its indexed mesh, LOD 1 of at most that many triangles and its
+// chain cost about what an in-memory leaf of that size does). That share is not taken from the
+// others (the octree sort keeps its own, and with it the in-memory octree), so each such leaf in
+// work (one per thread at most) may take the bake up to that much above its usual peak: on the
+// 1M city at --memory 33M, leaves of up to 3968 triangles at --max-depth 4 (the cap: 3975)
+// peaked at 52 to 66 MiB in three runs (66: two at once), against 53 to 54 MiB at --max-depth
+// 10; the 1M rock at --memory 29M, leaves of up to 3473 at --max-depth 4 (cap 3494), 32 MiB as
+// at --max-depth 10.
 constexpr std::uint64_t kMaxDepthLeafShare = 4;
-
-// The most triangles a leaf at max_depth may hold (max_depth_leaf_triangles), and the error that
-// refuses a larger one: it names the cell, the cap, what the cap's triangles cost and what to
-// change.
-MaxDepthLeafCap max_depth_leaf_cap(const BakeOptions& options, VertexLayout layout) {
-  const std::uint64_t record_bytes = soup_record_bytes(layout);
-  MaxDepthLeafCap cap;
-  cap.triangles = max_depth_leaf_triangles(options.memory_budget_bytes, layout);
-  cap.refuse = [budget = options.memory_budget_bytes, record_bytes](const OctreeNode& node,
-                                                                   std::uint64_t triangles) {
-    const std::string cell =
-        node.depth == 0 ? "the octree's root cell" : "octree cell " + node.path();
-    return usage_error(cell + " at --max-depth " + std::to_string(node.depth) +
-                       " holds more than " + std::to_string(triangles) + " triangles (" +
-                       mib(triangles * record_bytes) + " of soup records, about " +
-                       mib(triangles * record_bytes * kLeafCostInRecords) +
-                       " to build its LODs), more than a leaf at max depth may take under " +
-                       "--memory " + mib(budget) + "; raise --max-depth (or --memory)");
-  };
-  return cap;
-}
+// A streamed leaf's sorts (its records by triangle id, its edges) take 1 / this of the budget.
+constexpr std::uint64_t kStreamedSortShare = 16;
 
 // The soup's way into the octree sort (SoupOptions::sink). When the soup stage leaves room
 // for a sorter beside it (its out-of-core path keeps about half the budget free), the records
@@ -188,6 +168,7 @@ class OctreeInput {
   const OctreeBudget& budget() const { return budget_; }
   unsigned workers() const { return threads_ > 1 ? threads_ - 1 : 0; }
   bool streamed() const { return file_.empty(); }  // no soup file was written
+  const fs::path& work() const { return work_; }
 
  private:
   Result<std::unique_ptr<RecordSorter>> create_sorter(std::uint64_t budget) const {
@@ -238,7 +219,7 @@ class OctreeInput {
 
 LodTreeOptions lod_tree_options(const BakeOptions& options, VertexLayout layout,
                                 const RootCube& cube, const fs::path& root, unsigned workers,
-                                const OctreeBudget& budget) {
+                                const OctreeBudget& budget, const fs::path& work) {
   LodTreeOptions o;
   o.root = root;
   o.layout = layout;
@@ -248,7 +229,33 @@ LodTreeOptions lod_tree_options(const BakeOptions& options, VertexLayout layout,
   o.workers = workers;
   o.queue_bytes = budget.queue_bytes;
   o.keep_bytes = budget.keep_bytes;
+  o.streamed_chunk_triangles = std::max<std::uint64_t>(
+      max_depth_leaf_triangles(options.memory_budget_bytes, layout), options.max_tris + 1ull);
+  o.streamed_sort_bytes = options.memory_budget_bytes / kStreamedSortShare;
+  o.work_dir = work;
   return o;
+}
+
+// Where the OctreeBuilder puts a leaf at max_depth over max_depth_leaf_triangles: its records
+// go to a LeafRecordSpill (`records(count)` appends them when the builder has only keys), the
+// finished file to the LOD tree.
+MaxDepthLeafSpill max_depth_leaf_spill(const BakeOptions& options, VertexLayout layout,
+                                       LeafRecordSpill& spill, LodTreeBuilder& lod_tree,
+                                       OctreeBuilder* const& builder,
+                                       std::function<Status(std::size_t count)> records = {}) {
+  MaxDepthLeafSpill s;
+  s.triangles = max_depth_leaf_triangles(options.memory_budget_bytes, layout);
+  s.append = [&spill, records](const OctreeNode&, std::span<const std::byte> bytes,
+                               std::size_t count) {
+    return records ? records(count) : spill.append(bytes);
+  };
+  s.finish = [&spill, &lod_tree, &builder](std::int32_t node) -> Status {
+    if (cleanup_signal_received()) return interrupted();
+    auto file = spill.finish();
+    if (!file.ok()) return file.status();
+    return lod_tree.add_streamed_leaf(node, builder->nodes(), std::move(file).value());
+  };
+  return s;
 }
 
 struct OctreeResult {
@@ -305,15 +312,17 @@ Result<OctreeResult> build_octree(const BakeOptions& options, const SoupResult& 
   // LOD chains (and then their parents') are built meanwhile (lod_tree.h)
   start = Clock::now();
   LodTreeBuilder lod_tree(
-      lod_tree_options(options, soup.layout, result.cube, root, workers, budget));
+      lod_tree_options(options, soup.layout, result.cube, root, workers, budget, input.work()));
   OctreeBuilder* builder_ptr = nullptr;
+  LeafRecordSpill spill(input.work(), soup.layout, budget.io_bytes,
+                        options.memory_budget_bytes / kStreamedSortShare);
   OctreeBuilder builder(options.max_tris, options.max_depth, record_bytes,
                         soup_triangle_id_offset(soup.layout),
                         [&](std::int32_t node, std::vector<std::byte>&& records) {
                           if (cleanup_signal_received()) return interrupted();
                           return lod_tree.add_leaf(node, builder_ptr->nodes(), std::move(records));
                         },
-                        max_depth_leaf_cap(options, soup.layout));
+                        max_depth_leaf_spill(options, soup.layout, spill, lod_tree, builder_ptr));
   builder_ptr = &builder;
   std::uint64_t done = 0;
   Status streamed;
@@ -405,7 +414,8 @@ MeshOrder sort_mesh_triangles(const BakeOptions& options, unsigned threads, cons
 }
 
 Result<OctreeResult> build_octree_from_mesh(const BakeOptions& options, unsigned threads,
-                                            const SoupMesh& mesh, const fs::path& root) {
+                                            const SoupMesh& mesh, const fs::path& root,
+                                            const fs::path& work) {
   OctreeResult result;
   result.cube = RootCube::around(mesh.bounds);
   const unsigned workers = threads > 1 ? threads - 1 : 0;
@@ -424,27 +434,33 @@ Result<OctreeResult> build_octree_from_mesh(const BakeOptions& options, unsigned
   // octree: the tree from the keys alone; each leaf's records gathered from the mesh
   start = Clock::now();
   LodTreeBuilder lod_tree(
-      lod_tree_options(options, mesh.layout, result.cube, root, workers, budget.value()));
+      lod_tree_options(options, mesh.layout, result.cube, root, workers, budget.value(), work));
   const std::size_t record_bytes = soup_record_bytes(mesh.layout);
   std::size_t next_leaf = 0;  // first entry of `sorted` in the next leaf
+  // The soup records of the next `count` triangles of `sorted`.
+  auto gather = [&](std::size_t count) {
+    std::vector<std::byte> records(count * record_bytes);
+    std::byte* out = records.data();
+    for (std::size_t i = next_leaf; i < next_leaf + count; ++i, out += record_bytes) {
+      const std::uint32_t t = sorted.ids[i];
+      store_soup_record(out, mesh.layout, mesh.vertices.data(),
+                        mesh.triangles.data() + 3 * std::size_t{t}, t);
+    }
+    next_leaf += count;
+    return records;
+  };
+  LeafRecordSpill spill(work, mesh.layout, budget->io_bytes,
+                        options.memory_budget_bytes / kStreamedSortShare);
   OctreeBuilder* builder_ptr = nullptr;
   OctreeBuilder builder(
       options.max_tris, options.max_depth, 0, 0,
       [&](std::int32_t node, std::vector<std::byte>&&) -> Status {
         if (cleanup_signal_received()) return interrupted();
         const auto& nodes = builder_ptr->nodes();
-        const std::size_t count = nodes[static_cast<std::size_t>(node)].triangles;
-        std::vector<std::byte> records(count * record_bytes);
-        std::byte* out = records.data();
-        for (std::size_t i = next_leaf; i < next_leaf + count; ++i, out += record_bytes) {
-          const std::uint32_t t = sorted.ids[i];
-          store_soup_record(out, mesh.layout, mesh.vertices.data(),
-                            mesh.triangles.data() + 3 * std::size_t{t}, t);
-        }
-        next_leaf += count;
-        return lod_tree.add_leaf(node, nodes, std::move(records));
+        return lod_tree.add_leaf(node, nodes, gather(nodes[static_cast<std::size_t>(node)].triangles));
       },
-      max_depth_leaf_cap(options, mesh.layout));
+      max_depth_leaf_spill(options, mesh.layout, spill, lod_tree, builder_ptr,
+                           [&](std::size_t count) { return spill.append(gather(count)); }));
   builder_ptr = &builder;
   for (std::size_t first = 0; first < n; first += kMeshKeyBlock) {
     const std::size_t m = std::min(kMeshKeyBlock, n - first);
@@ -563,7 +579,7 @@ Result<BakeReport> run_bake(const BakeOptions& options) {
         return mesh_octree_fits(options, octree_input.workers(), layout, vertices, triangles);
       };
       soup_options.mesh_sink.consume = [&](const SoupMesh& mesh) -> Status {
-        auto built = build_octree_from_mesh(options, threads, mesh, staging->path());
+        auto built = build_octree_from_mesh(options, threads, mesh, staging->path(), work->path());
         if (!built.ok()) return built.status();
         mesh_octree.emplace(std::move(built).value());
         return {};

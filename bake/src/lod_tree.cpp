@@ -17,6 +17,7 @@
 
 #include "node_index.h"
 #include "octolod/formats/node_file.h"
+#include "streamed_leaf.h"
 #include "temp_dir.h"
 
 namespace octolod::bake {
@@ -58,6 +59,7 @@ struct Task {
   std::int32_t node = -1;
   std::uint64_t weight = 0;  // input triangles
   std::vector<std::byte> records;  // a leaf's soup records; empty for an internal node
+  TempFile streamed;               // a streamed leaf's records instead (add_streamed_leaf)
   bool leaf = false;
 };
 
@@ -74,7 +76,9 @@ bool later(const Task& a, const Task& b) {
 // What a finished node hands back to the scheduler.
 struct NodeDone {
   NodeLods lods;
-  NodeMesh finest;  // LOD 0, which the parent merges when it fits its merge_bytes
+  // LOD 0, which the parent merges when it fits its merge_bytes; empty for a streamed leaf,
+  // whose LOD 0 the parent reads from its file
+  NodeMesh finest;
 };
 
 // A thread's reusable buffers.
@@ -96,7 +100,7 @@ class LodTreeBuilder::Impl {
   ~Impl() { stop(); }
 
   Status add_leaf(std::int32_t node, const std::vector<OctreeNode>& nodes,
-                  std::vector<std::byte>&& records) {
+                  std::vector<std::byte>&& records, TempFile streamed) {
     std::unique_lock lock(mutex_);
     if (!error_.ok()) return error_;
     register_nodes(nodes);
@@ -107,6 +111,7 @@ class LodTreeBuilder::Impl {
     task.weight = nodes[static_cast<std::size_t>(node)].triangles;
     queued_bytes_ += records.size();
     task.records = std::move(records);
+    task.streamed = std::move(streamed);
     push(std::move(task));
     // Without workers the caller does everything now; with them, it runs node work itself
     // rather than let the queue grow past queue_bytes.
@@ -260,6 +265,7 @@ class LodTreeBuilder::Impl {
                             Scratch& scratch) {
     if (cleanup_signal_received()) return interrupted();
     OCTOLOD_RETURN_IF_ERROR(make_directory(dir));
+    if (!task.streamed.empty()) return run_streamed_leaf(task, dir, cell);
     NodeMesh mesh;
     scratch.indexer.index(task.records, options_.layout, mesh);
     task.records = {};  // the queue's bytes are given back in run_one
@@ -273,6 +279,26 @@ class LodTreeBuilder::Impl {
     auto lods = build_lods(std::move(mesh), 0.0, cell, o);
     if (!lods.ok()) return lods.status();
     return write_lods(dir, lods.value());
+  }
+
+  Result<NodeDone> run_streamed_leaf(Task& task, const std::string& dir, const Bounds& cell) {
+    StreamedLeafOptions o;
+    o.layout = options_.layout;
+    o.cell = cell;
+    o.build_lods = options_.build_lods;
+    o.lod = options_.lod;
+    o.chunk_triangles = options_.streamed_chunk_triangles;
+    o.work_dir = options_.work_dir;
+    o.sort_budget_bytes = options_.streamed_sort_bytes;
+    auto built = build_streamed_leaf(task.streamed.path(), options_.root, dir, o);
+    task.streamed.remove();
+    if (!built.ok()) return built.status();
+    auto done = write_lods(dir, built->coarser, 1);
+    if (!done.ok()) return done.status();
+    done->lods.lods.insert(done->lods.lods.begin(), built->lod0);
+    done->lods.bounds.extend(built->lod0_bounds);
+    done->finest = {};
+    return done;
   }
 
   Result<NodeDone> run_internal(std::array<ChildLod, 8>& children, const std::string& dir,
@@ -319,13 +345,15 @@ class LodTreeBuilder::Impl {
     return {};
   }
 
-  // Writes lod<i>.olod for every LOD; LOD 0 is handed to the parent.
-  Result<NodeDone> write_lods(const std::string& dir, std::vector<Lod>& lods) const {
+  // Writes lod<first + i>.olod for every LOD; the first is handed to the parent.
+  Result<NodeDone> write_lods(const std::string& dir, std::vector<Lod>& lods,
+                              std::size_t first = 0) const {
     OCTOLOD_RETURN_IF_ERROR(make_directory(dir));
     NodeDone done;
     for (std::size_t i = 0; i < lods.size(); ++i) {
       const NodeMesh& mesh = lods[i].mesh;
-      const std::string file = (dir.empty() ? "" : dir + "/") + "lod" + std::to_string(i) + ".olod";
+      const std::string file =
+          (dir.empty() ? "" : dir + "/") + "lod" + std::to_string(first + i) + ".olod";
       OCTOLOD_RETURN_IF_ERROR(write_node_file(options_.root / file, mesh));
       LodInfo info;
       info.triangles = static_cast<std::uint32_t>(mesh.triangle_count());
@@ -357,11 +385,11 @@ class LodTreeBuilder::Impl {
       ChildLod& c = (*p.child)[octant];
       c.present = true;
       c.lods = results_[static_cast<std::size_t>(node)]->lods;
-      p.child_triangles += done.finest.triangle_count();
+      p.child_triangles += c.lods.front().triangles;
       const std::size_t bytes = mesh_bytes(done.finest);
       // a LOD 0 larger than a whole merged input is only merged where nothing coarser exists:
-      // not worth keeping
-      if (bytes <= merge_bytes_) {
+      // not worth keeping (nor a streamed leaf's, which is only in its file)
+      if (bytes <= merge_bytes_ && !done.finest.indices.empty()) {
         c.spilled = kept_bytes_ + bytes > options_.keep_bytes;
         if (!c.spilled) {
           c.in_memory = true;
@@ -447,7 +475,12 @@ LodTreeBuilder::~LodTreeBuilder() = default;
 
 Status LodTreeBuilder::add_leaf(std::int32_t node, const std::vector<OctreeNode>& nodes,
                                 std::vector<std::byte>&& records) {
-  return impl_->add_leaf(node, nodes, std::move(records));
+  return impl_->add_leaf(node, nodes, std::move(records), {});
+}
+
+Status LodTreeBuilder::add_streamed_leaf(std::int32_t node, const std::vector<OctreeNode>& nodes,
+                                         TempFile records) {
+  return impl_->add_leaf(node, nodes, {}, std::move(records));
 }
 
 Status LodTreeBuilder::finish(const std::vector<OctreeNode>& nodes,

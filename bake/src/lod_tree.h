@@ -2,7 +2,9 @@
 // the octree stream hands out its leaves:
 //
 //   leaf      its triangles are indexed (node_index.h) and become LOD 0 (the original, error 0);
-//             build_lods continues the chain from it
+//             build_lods continues the chain from it. A leaf too large for memory
+//             (add_streamed_leaf) is built from its record file instead (streamed_leaf.h);
+//             its LOD 0 is only in its file, which its parent reads when it merges it
 //   internal  once the stream has left its key range (all its children are known) and every
 //             child's chain is done: merge_meshes of one LOD per child (choose_merged_lods: the
 //             finest ones whose meshes fit LodTreeOptions::merge_bytes together, a leaf's
@@ -46,6 +48,7 @@
 
 #include "morton.h"
 #include "octolod/bake/simplify.h"
+#include "octolod/bake/temp_file.h"
 #include "octolod/formats/manifest.h"
 #include "octolod/formats/status.h"
 #include "octolod/formats/vertex_layout.h"
@@ -76,6 +79,11 @@ struct LodTreeOptions {
   // (max_tris and the layout), ~1 MiB with the defaults: 1M rock / city peak RSS at --memory
   // 64M 74 / 63 MiB; at twice that the city's was 92 MiB, over the budget + 24 MiB.
   std::size_t merge_bytes = 0;
+  // Leaves handed out as record files (add_streamed_leaf, streamed_leaf.h): triangles held in
+  // memory at once (their LOD 1's limit too), the edge sort's memory and temporary directory.
+  std::uint64_t streamed_chunk_triangles = 1 << 16;
+  std::uint64_t streamed_sort_bytes = 4 << 20;
+  std::filesystem::path work_dir;
 };
 
 // Bytes of the NodeMesh of a LOD: its vertex floats and its indices.
@@ -109,6 +117,11 @@ class LodTreeBuilder {
   // the caller runs node work itself or waits. The first error of any node work ends the build.
   Status add_leaf(std::int32_t node, const std::vector<OctreeNode>& nodes,
                   std::vector<std::byte>&& records);
+  // The same for a leaf too large for memory (OctreeBuilder's MaxDepthLeafSpill): its soup
+  // records ordered by triangle id in `records` (removed once built), its LODs built streaming
+  // (streamed_leaf.h); it counts nothing against queue_bytes.
+  Status add_streamed_leaf(std::int32_t node, const std::vector<OctreeNode>& nodes,
+                           TempFile records);
   // After OctreeBuilder::finish(): the remaining node work, on the caller and the workers.
   // `progress(done, total)` is called on the caller as nodes complete. The first error.
   Status finish(const std::vector<OctreeNode>& nodes,

@@ -22,16 +22,17 @@ std::string OctreeNode::path() const {
 
 OctreeBuilder::OctreeBuilder(std::uint32_t max_tris, std::uint32_t max_depth,
                              std::size_t record_bytes, std::size_t tie_offset, LeafFn on_leaf,
-                             MaxDepthLeafCap cap)
+                             MaxDepthLeafSpill spill)
     : max_tris_(max_tris),
       max_depth_(max_depth),
       record_bytes_(record_bytes),
       tie_offset_(tie_offset),
       on_leaf_(std::move(on_leaf)),
-      cap_(std::move(cap)) {
-  cap_.triangles = std::max<std::uint64_t>(cap_.triangles, std::uint64_t{max_tris} + 1);
-  assert((cap_.refuse || cap_.triangles == std::numeric_limits<std::uint64_t>::max()) &&
-         "a MaxDepthLeafCap with a limit needs its refuse function");
+      spill_(std::move(spill)) {
+  spill_.triangles = std::max<std::uint64_t>(spill_.triangles, std::uint64_t{max_tris} + 1);
+  assert(((spill_.append && spill_.finish) ||
+          spill_.triangles == std::numeric_limits<std::uint64_t>::max()) &&
+         "a MaxDepthLeafSpill with a limit needs its append and finish functions");
   assert(max_depth <= kMaxOctreeDepth && "max_depth above kMaxOctreeDepth: keys would overflow");
   assert(max_tris >= 1 && "max_tris must be at least 1");
   assert((record_bytes == 0 || tie_offset + 4 <= record_bytes) && "tie_offset outside the record");
@@ -50,14 +51,24 @@ Status OctreeBuilder::push(std::span<const std::byte> records,
     }
     // The run of keys in the candidate's cell (the stream is sorted), appended at once, up to
     // the record that makes it split (so the buffer never holds more than max_tris + 1). At
-    // max_depth the whole run, unless it takes the candidate over the cap: then nothing more
-    // is buffered.
+    // max_depth the whole run; once it takes the candidate over the spill's cap, the buffer
+    // and every later run go to the spill.
     std::size_t limit = keys.size();
     if (c.depth < max_depth_) limit = std::min(limit, i + (max_tris_ + 1 - buffer_keys_.size()));
     std::size_t j = i;
     while (j < limit && prefix_of(keys[j], c.depth) == c.prefix) ++j;
-    if (c.depth == max_depth_ && buffer_keys_.size() + (j - i) > cap_.triangles)
-      return cap_.refuse(c, cap_.triangles);
+    if (c.depth == max_depth_ &&
+        (spilled_ > 0 || buffer_keys_.size() + (j - i) > spill_.triangles)) {
+      if (spilled_ == 0 && !buffer_keys_.empty()) {
+        OCTOLOD_RETURN_IF_ERROR(spill_run(c, buffer_, buffer_keys_.size()));
+        buffer_ = {};
+        buffer_keys_ = {};
+      }
+      OCTOLOD_RETURN_IF_ERROR(
+          spill_run(c, records.subspan(i * record_bytes_, (j - i) * record_bytes_), j - i));
+      i = j;
+      continue;
+    }
     buffer_.insert(buffer_.end(), records.data() + i * record_bytes_,
                    records.data() + j * record_bytes_);
     buffer_keys_.insert(buffer_keys_.end(), keys.begin() + static_cast<std::ptrdiff_t>(i),
@@ -181,9 +192,22 @@ void OctreeBuilder::order_equal_keys(std::vector<std::byte>& records_vector,
   }
 }
 
+Status OctreeBuilder::spill_run(const OctreeNode& candidate, std::span<const std::byte> records,
+                                std::size_t count) {
+  spilled_ += count;
+  return spill_.append(candidate, records, count);
+}
+
 Status OctreeBuilder::close_candidate() {
   const std::int32_t leaf = candidate_;
   candidate_ = -1;
+  if (spilled_ > 0) {
+    OctreeNode& n = nodes_[static_cast<std::size_t>(leaf)];
+    n.leaf = true;
+    n.triangles = spilled_;
+    spilled_ = 0;
+    return spill_.finish(leaf);
+  }
   std::vector<std::byte> records = std::move(buffer_);
   buffer_ = {};
   Status handed = hand_out_leaf(leaf, std::move(records), buffer_keys_);

@@ -10,9 +10,10 @@
 // settled at once (split again or handed out as a leaf), the last becomes the candidate. When
 // the stream leaves the candidate's key range it is a leaf and its records go to the caller.
 // Memory: one candidate buffer of at most max_tris + 1 records and a copy of a settled leaf.
-// A candidate at max_depth cannot split, so it would keep everything its cell gets: a
-// MaxDepthLeafCap bounds it, the build ends with the cap's error as soon as the stream brings
-// it more than the cap (its buffer never holds more than the cap's records).
+// A candidate at max_depth cannot split, so it would keep everything its cell gets: once the
+// stream brings it more than a MaxDepthLeafSpill's cap, its records (the buffered ones, then
+// every later run of its cell) go to the spill instead of the buffer, and the leaf is handed
+// out to the spill (its buffer never holds more than the cap's records).
 //
 // Rules (seed 3.4): a node splits while it holds more than max_tris triangles and its depth is
 // below max_depth; each triangle belongs to exactly one leaf, the one whose cell holds its
@@ -47,14 +48,18 @@ struct OctreeNode {
 // Receives a finished leaf: its node index and its records in leaf order (ownership passes).
 using LeafFn = std::function<Status(std::int32_t node, std::vector<std::byte>&& records)>;
 
-// The most triangles a leaf at max_depth may hold; at least max_tris + 1 always pass (a split's
-// child at max_depth may hold all of its parent's records). When the stream brings a candidate
-// at max_depth more, refuse(node, cap) is called with that candidate (its depth and prefix
-// set, nothing beyond the cap buffered) and the cap in effect; the error it returns ends the
-// build.
-struct MaxDepthLeafCap {
+// Where a leaf at max_depth goes when it holds more than `triangles` (the most a leaf handed
+// out in memory may hold; at least max_tris + 1 always stay in memory: a split's child at
+// max_depth may hold all of its parent's records). When the stream brings such a candidate
+// more, append(node, records, count) receives its buffered records, then every later run of
+// its cell as it arrives (stream order: equal keys are NOT ordered by the tie value, the
+// receiver orders them; `records` empty when record_bytes is 0), and finish(node) ends the
+// leaf (OctreeNode::triangles set) instead of LeafFn. An error either returns ends the build.
+struct MaxDepthLeafSpill {
   std::uint64_t triangles = std::numeric_limits<std::uint64_t>::max();
-  std::function<Status(const OctreeNode& node, std::uint64_t cap)> refuse;
+  std::function<Status(const OctreeNode& node, std::span<const std::byte> records,
+                       std::size_t count)> append;
+  std::function<Status(std::int32_t node)> finish;
 };
 
 class OctreeBuilder {
@@ -65,10 +70,10 @@ class OctreeBuilder {
   // records, and a leaf's triangles are the next OctreeNode::triangles keys of the stream.
   // The tree (nodes(), leaves and their order) depends on the keys only. Leaf order: by key,
   // equal keys by the u32 at byte `tie_offset` of the record (the triangle id), so a leaf's
-  // records do not depend on the order equal keys arrived in. `cap` only refuses, it never
-  // changes the tree; its default lets leaves at max_depth grow without bound.
+  // records do not depend on the order equal keys arrived in. `spill` only decides where a
+  // leaf's records go, it never changes the tree; its default keeps every leaf in memory.
   OctreeBuilder(std::uint32_t max_tris, std::uint32_t max_depth, std::size_t record_bytes,
-                std::size_t tie_offset, LeafFn on_leaf, MaxDepthLeafCap cap = {});
+                std::size_t tie_offset, LeafFn on_leaf, MaxDepthLeafSpill spill = {});
 
   // The next records of the sorted stream and their keys (keys.size() records, non-decreasing
   // keys across all calls).
@@ -86,6 +91,8 @@ class OctreeBuilder {
   Status split_candidate_while_full();
   Status settle(std::int32_t node, std::size_t begin, std::size_t end);
   Status close_candidate();
+  Status spill_run(const OctreeNode& candidate, std::span<const std::byte> records,
+                   std::size_t count);
   Status hand_out_leaf(std::int32_t node, std::vector<std::byte>&& records,
                        std::span<const std::uint64_t> keys);
   void order_equal_keys(std::vector<std::byte>& records, std::span<const std::uint64_t> keys) const;
@@ -98,12 +105,13 @@ class OctreeBuilder {
   std::size_t record_bytes_;
   std::size_t tie_offset_;
   LeafFn on_leaf_;
-  MaxDepthLeafCap cap_;  // cap_.triangles >= max_tris_ + 1
+  MaxDepthLeafSpill spill_;  // spill_.triangles >= max_tris_ + 1
   std::vector<OctreeNode> nodes_;
   std::vector<std::int32_t> open_;  // split nodes on the current key's path, root first
   std::int32_t candidate_ = -1;     // the node whose records are being buffered
   std::vector<std::byte> buffer_;   // the candidate's records
   std::vector<std::uint64_t> buffer_keys_;
+  std::uint64_t spilled_ = 0;  // records of the candidate given to the spill (0: not spilling)
 };
 
 }  // namespace octolod::bake

@@ -24,14 +24,15 @@
 //
 // The output depends only on the input and (max_tris, max_depth, lods, method): not on the
 // budget, the thread count or the work directory (the manifest's parameters, stage_seconds and
-// stats aside).
+// stats aside), except for the leaves at max_depth larger than max_depth_leaf_triangles of the
+// budget, whose LODs are built streaming in chunks of that size (see max_depth below).
 //
 // Memory: the soup stage, then the octree sort, the leaf queue, the node work in flight and the
 // children's LODs kept for their parents share the budget; kept LODs beyond their share are
 // re-read from their files by the parent. Peak RSS is about the budget plus the program's
 // fixed footprint, plus up to a quarter of the budget for each leaf at max_depth larger than
 // usual in work (each thread may hold one); a leaf at max_depth too large for that
-// quarter (max_depth_leaf_triangles) fails the bake before its memory is spent.
+// quarter (max_depth_leaf_triangles) is built streaming from a temporary file within it.
 #pragma once
 
 #include <cstdint>
@@ -61,13 +62,17 @@ struct BakeOptions {
   // Memory: about (max_tris + 1) soup records per leaf in flight. At least 1.
   std::uint32_t max_tris = 2000;
   // Deepest level (root = 0), at most 21. A leaf at max_depth cannot split, so it keeps all
-  // its triangles; the bake fails (usage error naming the cell) as soon as one holds more than
-  // max_depth_leaf_triangles(memory_budget_bytes, layout) (and max_tris + 1), before it spends
-  // memory on it: raise max_depth (or the budget) for dense models.
+  // its triangles; one holding more than max_depth_leaf_triangles(memory_budget_bytes, layout)
+  // (and max_tris + 1) is spilled to a temporary file and built streaming (memory bounded by
+  // that cap, not by the leaf): LOD 0 its original triangles, stored per chunk of that many
+  // (a vertex shared by two chunks is stored twice), LOD 1 a vertex clustering of at most that
+  // many triangles (and half the leaf) with the leaf's boundary kept and per-cell attributes
+  // (attribute seams inside a cell are averaged), the rest of the chain from LOD 1. Slower per
+  // triangle than in-memory leaves: raise max_depth for dense models when that matters.
   std::uint32_t max_depth = 10;
   // Cap on the bake's buffers together (soup stage, octree sort, leaf buffers); the peak RSS is
   // this plus the program's fixed footprint (and the share of leaves at max_depth larger than
-  // max_tris + 1: max_depth_leaf_triangles). Larger budgets mean fewer sorted runs and merges
+  // max_tris + 1: max_depth_leaf_triangles, in memory or streamed). Larger budgets mean fewer sorted runs and merges
   // and, once the vertices fit in half of it, the in-core soup path. At least kMinBakeBudget.
   std::uint64_t memory_budget_bytes = std::uint64_t{64} << 20;
   // Where the temporary files go (inside a fresh ".octolod-tmp-*" directory); empty: next to
@@ -108,8 +113,9 @@ inline constexpr std::uint64_t kMinBakeBudget = std::uint64_t{1} << 20;
 // vertices of `layout` (a leaf of max_tris + 1 is always allowed): a quarter of the budget at
 // about 16 soup records of memory per triangle (its records, indexed mesh, simplification
 // arrays and LOD chain, measured on leaves of up to 400K triangles). That quarter comes on top
-// of the rest of the bake's buffers, for each such leaf in work. Depends only on its arguments:
-// the cap refuses a bake, never changes its tree.
+// of the rest of the bake's buffers, for each such leaf in work; a larger leaf is built
+// streaming in chunks of this many triangles. Depends only on its arguments: the cap decides
+// how a leaf is built, never the tree.
 std::uint64_t max_depth_leaf_triangles(std::uint64_t memory_budget_bytes, VertexLayout layout);
 
 struct BakeReport {
@@ -126,8 +132,7 @@ struct BakeReport {
 
 // Bakes options.input into options.output (see the top of this file). Errors: usage for bad
 // options (max_tris 0, max_depth > 21, budget below kMinBakeBudget or too small for max_tris,
-// an output that is a file or a non-empty foreign directory, a leaf at max_depth over
-// max_depth_leaf_triangles: found during the octree stream), the PLY reader's bad_input /
+// an output that is a file or a non-empty foreign directory), the PLY reader's bad_input /
 // unsupported / io naming the file, io for any refused write (out of space included) naming
 // the path. On error nothing is published and every temporary file is gone.
 Result<BakeReport> bake(const BakeOptions& options);

@@ -1,0 +1,102 @@
+// Octree leaves too large to hold in memory (issue 4 item 6: a node whose input exceeds the
+// budget is clustered streaming, memory proportional to the output). A leaf at --max-depth
+// cannot split, so its cell may get any share of the input; past the in-memory leaf cap the
+// OctreeBuilder hands its soup records to a LeafRecordSpill (a file) and the leaf's LODs are
+// built from that file in passes of bounded memory:
+//
+//   LOD 0  the original triangles: chunks of the records indexed one at a time (NodeIndexer;
+//          a vertex shared by two chunks is stored once per chunk) and appended to one node
+//          file (NodeFileWriter), so readers see an ordinary node file.
+//   LOD 1  vertex clustering on a uniform grid inside the node (Lindstrom 2000, "Out-of-core
+//          simplification of large polygonal models"): the node's boundary edges (used by an
+//          odd number of its triangles, vertex identity = position bits, as find_boundary) are
+//          found by an external sort of edge records and stay unchanged (their positions are
+//          clusters of their own, vertex records kept bit-identical), so cuts mixing this
+//          leaf's LODs with its neighbours' never crack. Every other corner falls in its grid
+//          cell; a cell's position comes from its area-weighted plane quadric (quadric.h) as in
+//          the in-memory grid (place_representative), its attributes are the area-weighted mean
+//          of its corners' (normals renormalized, colours clamped: seams inside a cell are
+//          averaged, unlike the in-memory grid's wedges). Triangles whose corners fall in three
+//          distinct clusters survive once when their cluster triple is seen an odd number of
+//          times (build_clustered_mesh's rule). The resolution is searched by counting passes
+//          (memory bounded by the triangle limit) for at most min(chunk_triangles, half the
+//          input) triangles. Its error bound is the max over chunks of
+//          hausdorff_upper_bound(chunk, LOD 1): the distance from the input decomposes over
+//          any partition of the input.
+//   LOD 2+ build_lods from LOD 1 and its error, in memory.
+//
+// Memory: one chunk of records and its indexed mesh, the grid's clusters and candidate
+// triangles (bounded by 2 x the triangle limit), the boundary's positions, LOD 1 and its chain,
+// and the edge sort's budget. Deterministic: a pure function of the record file and options.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <filesystem>
+#include <optional>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "octolod/bake/simplify.h"
+#include "octolod/bake/temp_file.h"
+#include "octolod/formats/manifest.h"
+#include "octolod/formats/status.h"
+#include "octolod/formats/vertex_layout.h"
+#include "record_file.h"
+
+namespace octolod::bake {
+
+// Collects the soup records of one oversize leaf into a temporary file in `work_dir`, then
+// orders them by triangle id (the records arrive in stream order, where equal keys may come in
+// any order) so the leaf's file, and everything built from it, is the same on any schedule.
+class LeafRecordSpill {
+ public:
+  LeafRecordSpill(std::filesystem::path work_dir, VertexLayout layout, std::size_t buffer_bytes,
+                  std::uint64_t sort_budget_bytes);
+  // Whole soup records (soup_record_bytes(layout) each); the first call opens the file.
+  Status append(std::span<const std::byte> records);
+  // The leaf's records ordered by triangle id, in a file owned by the caller; the spill is
+  // ready for the next leaf.
+  Result<TempFile> finish();
+
+ private:
+  std::filesystem::path work_dir_;
+  VertexLayout layout_;
+  std::size_t buffer_bytes_;
+  std::uint64_t sort_budget_bytes_;
+  TempFile file_;
+  std::optional<RecordWriter> writer_;
+  bool in_order_ = true;  // the records so far came by increasing triangle id
+  bool any_ = false;
+  std::uint32_t last_id_ = 0;
+};
+
+struct StreamedLeafOptions {
+  VertexLayout layout;  // of the soup records
+  Bounds cell;          // the leaf's octree cell, model units
+  bool build_lods = true;  // false: LOD 0 only
+  LodOptions lod;          // the chain's method and limits (the chain starts at LOD 1)
+  // Triangles held in memory at once (a chunk of records and its indexed mesh); LOD 1 has at
+  // most this many. >= 1.
+  std::uint64_t chunk_triangles = 1 << 16;
+  std::filesystem::path work_dir;          // the edge sort's temporary files
+  std::uint64_t sort_budget_bytes = 4 << 20;  // the edge sort's memory (external_sort.h)
+};
+
+struct StreamedLeafLods {
+  LodInfo lod0;     // written to root / dir / "lod0.olod", error 0
+  Bounds lod0_bounds;
+  std::vector<Lod> coarser;  // LOD 1, 2, ... (not written), errors in model units
+};
+
+// Writes LOD 0 of the leaf whose soup records (ordered by triangle id) are in the file
+// `records` to root / dir / "lod0.olod" and returns it with the leaf's coarser LODs. No LOD 1
+// when even the coarsest grid keeps more than the triangle limit (the locked boundary
+// dominates). Errors: io naming the file; bad_input for a non-finite position.
+Result<StreamedLeafLods> build_streamed_leaf(const std::filesystem::path& records,
+                                             const std::filesystem::path& root,
+                                             const std::string& dir,
+                                             const StreamedLeafOptions& options);
+
+}  // namespace octolod::bake
