@@ -105,9 +105,9 @@ Result<OctreeBudget> divide_octree_budget(const BakeOptions& options, VertexLayo
 constexpr std::uint64_t kLeafCostInRecords = 16;
 // A leaf at max_depth, which cannot split, may cost up to 1 / kMaxDepthLeafShare of the budget
 // in the LOD stage: that many triangles (max_depth_leaf_triangles) are handed out in memory, a
-// larger leaf is spilled to a record file and built streaming in chunks of that many
-// (streamed_leaf.h: the chunk, its indexed mesh, LOD 1 of at most that many triangles and its
-// chain cost about what an in-memory leaf of that size does). That share is not taken from the
+// larger leaf is spilled to a record file and built streaming (streamed_leaf.h: LOD 1 of at
+// most that many triangles and its chain cost about what an in-memory leaf of that size does,
+// the chunks it reads its records in a fraction of that). That share is not taken from the
 // others (the octree sort keeps its own, and with it the in-memory octree), so each such leaf in
 // work (one per thread at most) may take the bake up to that much above its usual peak: on the
 // 1M city at --memory 33M, leaves of up to 3968 triangles at --max-depth 4 (the cap: 3975)
@@ -117,6 +117,11 @@ constexpr std::uint64_t kLeafCostInRecords = 16;
 constexpr std::uint64_t kMaxDepthLeafShare = 4;
 // A streamed leaf's sorts (its records by triangle id, its edges) take 1 / this of the budget.
 constexpr std::uint64_t kStreamedSortShare = 16;
+// A streamed leaf reads its records in chunks of this many leaves of max_depth_leaf_triangles:
+// a chunk costs about 3 records per triangle (records, indexed mesh, hash slots), a fifth of
+// an in-memory leaf's 16, and larger chunks store fewer vertices twice in LOD 0 (1M rock at
+// --memory 16M --max-depth 0: 942K vertices in chunks of 1 cap, 574K in memory).
+constexpr std::uint64_t kStreamedChunkLeaves = 4;
 
 // The soup's way into the octree sort (SoupOptions::sink). When the soup stage leaves room
 // for a sorter beside it (its out-of-core path keeps about half the budget free), the records
@@ -229,8 +234,9 @@ LodTreeOptions lod_tree_options(const BakeOptions& options, VertexLayout layout,
   o.workers = workers;
   o.queue_bytes = budget.queue_bytes;
   o.keep_bytes = budget.keep_bytes;
-  o.streamed_chunk_triangles = std::max<std::uint64_t>(
+  o.streamed_max_lod1_triangles = std::max<std::uint64_t>(
       max_depth_leaf_triangles(options.memory_budget_bytes, layout), options.max_tris + 1ull);
+  o.streamed_chunk_triangles = kStreamedChunkLeaves * o.streamed_max_lod1_triangles;
   o.streamed_sort_bytes = options.memory_budget_bytes / kStreamedSortShare;
   o.work_dir = work;
   return o;

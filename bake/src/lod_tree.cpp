@@ -288,6 +288,7 @@ class LodTreeBuilder::Impl {
     o.build_lods = options_.build_lods;
     o.lod = options_.lod;
     o.chunk_triangles = options_.streamed_chunk_triangles;
+    o.max_lod1_triangles = options_.streamed_max_lod1_triangles;
     o.work_dir = options_.work_dir;
     o.sort_budget_bytes = options_.streamed_sort_bytes;
     auto built = build_streamed_leaf(task.streamed.path(), options_.root, dir, o);

@@ -80,8 +80,9 @@ struct LodTreeOptions {
   // 64M 74 / 63 MiB; at twice that the city's was 92 MiB, over the budget + 24 MiB.
   std::size_t merge_bytes = 0;
   // Leaves handed out as record files (add_streamed_leaf, streamed_leaf.h): triangles held in
-  // memory at once (their LOD 1's limit too), the edge sort's memory and temporary directory.
+  // memory at once, their LOD 1's limit, the edge sort's memory and temporary directory.
   std::uint64_t streamed_chunk_triangles = 1 << 16;
+  std::uint64_t streamed_max_lod1_triangles = 1 << 14;
   std::uint64_t streamed_sort_bytes = 4 << 20;
   std::filesystem::path work_dir;
 };

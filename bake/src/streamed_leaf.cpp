@@ -580,7 +580,7 @@ Result<StreamedLeafLods> build_streamed_leaf(const fs::path& records, const fs::
   if (!options.build_lods) return result;
 
   OCTOLOD_RETURN_IF_ERROR(builder.find_boundary_positions(edges.path(), sorted_edges.path()));
-  const std::uint64_t limit = std::min<std::uint64_t>(options.chunk_triangles, survey.triangles / 2);
+  const std::uint64_t limit = std::min<std::uint64_t>(options.max_lod1_triangles, survey.triangles / 2);
   if (limit == 0) return result;
   auto g = builder.choose_resolution(limit);
   if (!g.ok()) return g.status();

@@ -19,7 +19,7 @@
 //          averaged, unlike the in-memory grid's wedges). Triangles whose corners fall in three
 //          distinct clusters survive once when their cluster triple is seen an odd number of
 //          times (build_clustered_mesh's rule). The resolution is searched by counting passes
-//          (memory bounded by the triangle limit) for at most min(chunk_triangles, half the
+//          (memory bounded by the triangle limit) for at most min(max_lod1_triangles, half the
 //          input) triangles. Its error bound is the max over chunks of
 //          hausdorff_upper_bound(chunk, LOD 1): the distance from the input decomposes over
 //          any partition of the input.
@@ -77,9 +77,11 @@ struct StreamedLeafOptions {
   Bounds cell;          // the leaf's octree cell, model units
   bool build_lods = true;  // false: LOD 0 only
   LodOptions lod;          // the chain's method and limits (the chain starts at LOD 1)
-  // Triangles held in memory at once (a chunk of records and its indexed mesh); LOD 1 has at
-  // most this many. >= 1.
+  // Triangles held in memory at once (a chunk of records and its indexed mesh, about 3 soup
+  // records per triangle); LOD 0 stores a vertex once per chunk that uses it. >= 1.
   std::uint64_t chunk_triangles = 1 << 16;
+  // The most triangles LOD 1 may have (its chain is built in memory). >= 1.
+  std::uint64_t max_lod1_triangles = 1 << 14;
   std::filesystem::path work_dir;          // the edge sort's temporary files
   std::uint64_t sort_budget_bytes = 4 << 20;  // the edge sort's memory (external_sort.h)
 };
