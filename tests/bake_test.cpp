@@ -305,6 +305,7 @@ TEST_F(BakeTest, LeafAtMaxDepthOverTheBudgetsCapIsStreamedIntoTheSameTree) {
     o.output = path(in_memory ? "in-memory" : "records");
     auto streamed = bake(o);
     ASSERT_TRUE(streamed.ok()) << streamed.status().message();
+    EXPECT_EQ(streamed->octree_in_memory, in_memory);
     const Manifest& m = streamed->manifest;
     ASSERT_EQ(m.nodes.size(), earlier->manifest.nodes.size());
     std::size_t changed = 0;

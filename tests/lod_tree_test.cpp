@@ -519,6 +519,8 @@ TEST_F(LodTreeTest, StreamedLeavesAreTheSameForAnyThreadCountAndOctreePath) {
   two.in_memory_octree = false;
   const LoadedTree a = bake_and_load(one);
   const LoadedTree b = bake_and_load(two);
+  EXPECT_EQ(a.manifest.stats.at("octree_in_memory"), 1.0);
+  EXPECT_EQ(b.manifest.stats.at("octree_in_memory"), 0.0);
   ASSERT_EQ(a.manifest.nodes.size(), b.manifest.nodes.size());
   for (std::size_t i = 0; i < a.manifest.nodes.size(); ++i) {
     ASSERT_EQ(a.lods[i].size(), b.lods[i].size()) << a.manifest.nodes[i].path;
