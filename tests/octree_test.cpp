@@ -2,7 +2,9 @@
 // one-pass OctreeBuilder, and the exact vertex dedup that turns leaf records into a NodeMesh.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstring>
+#include <filesystem>
 #include <map>
 #include <span>
 #include <string>
@@ -12,6 +14,8 @@
 #include "node_index.h"
 #include "octolod/bake/soup.h"
 #include "octree_build.h"
+#include "record_file.h"
+#include "streamed_leaf.h"
 
 namespace octolod::bake {
 namespace {
@@ -306,6 +310,52 @@ TEST(NodeIndexer, MergesBitIdenticalCornersAndKeepsSeams) {
   indexer.index(std::span(soup).first(soup_record_bytes(layout)), layout, mesh);
   EXPECT_EQ(mesh.indices, (std::vector<std::uint32_t>{0, 1, 2}));
   EXPECT_EQ(mesh.vertex_count(), 3u);
+}
+
+// Triangle ids of a file of soup records.
+std::vector<std::uint32_t> file_triangle_ids(const std::filesystem::path& file, VertexLayout layout) {
+  std::vector<std::uint32_t> ids;
+  auto reader = RecordReader::open(file, soup_record_bytes(layout), 4096);
+  EXPECT_TRUE(reader.ok());
+  if (!reader.ok()) return ids;
+  for (;;) {
+    auto block = reader->read();
+    EXPECT_TRUE(block.ok());
+    if (!block.ok() || block->empty()) return ids;
+    for (std::size_t i = 0; i < block->size(); i += soup_record_bytes(layout))
+      ids.push_back(static_cast<std::uint32_t>(load_soup_triangle_id(block->data() + i, layout)));
+  }
+}
+
+// A leaf's spilled records come back ordered by triangle id whatever order the stream brought
+// them in (equal keys), with their bytes; the spill is reusable, and a temporary file it made
+// is gone once its TempFile is.
+TEST(LeafRecordSpill, OrdersTheRecordsByTriangleId) {
+  const VertexLayout layout;
+  const std::vector<float> vertices = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+  const std::uint32_t corners[3] = {0, 1, 2};
+  const std::filesystem::path dir = ::testing::TempDir();
+  LeafRecordSpill spill(dir, layout, 4096, 1 << 16);
+  for (const std::vector<std::uint32_t>& order :
+       {std::vector<std::uint32_t>{7, 3, 9, 1, 5, 0}, std::vector<std::uint32_t>{0, 2, 4, 6}}) {
+    for (std::size_t first = 0; first < order.size(); first += 4) {  // appended in two runs
+      std::vector<std::byte> records;
+      for (std::size_t i = first; i < std::min(order.size(), first + 4); ++i) {
+        records.resize(records.size() + soup_record_bytes(layout));
+        store_soup_record(records.data() + records.size() - soup_record_bytes(layout), layout,
+                          vertices.data(), corners, order[i]);
+      }
+      ASSERT_TRUE(spill.append(records).ok());
+    }
+    auto file = spill.finish();
+    ASSERT_TRUE(file.ok()) << file.status().message();
+    std::vector<std::uint32_t> sorted = order;
+    std::sort(sorted.begin(), sorted.end());
+    EXPECT_EQ(file_triangle_ids(file->path(), layout), sorted);
+    const std::filesystem::path path = file->path();
+    file = TempFile{};
+    EXPECT_FALSE(std::filesystem::exists(path));
+  }
 }
 
 }  // namespace
