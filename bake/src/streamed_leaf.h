@@ -19,15 +19,18 @@
 //          averaged, unlike the in-memory grid's wedges). Triangles whose corners fall in three
 //          distinct clusters survive once when their cluster triple is seen an odd number of
 //          times (build_clustered_mesh's rule). The resolution is searched by counting passes
-//          (memory bounded by the triangle limit) for at most min(max_lod1_triangles, half the
-//          input) triangles. Its error bound is the max over chunks of
+//          (a resolution whose distinct cluster triples pass twice the limit counts as too
+//          fine, so memory stays bounded by the limit) for at most min(max_lod1_triangles,
+//          half the input) triangles. Its error bound is the max over chunks of
 //          hausdorff_upper_bound(chunk, LOD 1): the distance from the input decomposes over
 //          any partition of the input.
 //   LOD 2+ build_lods from LOD 1 and its error, in memory.
 //
-// Memory: one chunk of records and its indexed mesh, the grid's clusters and candidate
-// triangles (bounded by 2 x the triangle limit), the boundary's positions, LOD 1 and its chain,
-// and the edge sort's budget. Deterministic: a pure function of the record file and options.
+// Memory: one chunk of records and its indexed mesh, the grid's occupied cells (about LOD 1's
+// vertices) and candidate triangles (at most 2 x the limit), the boundary's positions, LOD 1
+// and its chain, and the edge sort's budget. Not bounded: a leaf whose locked boundary alone
+// keeps more than the limit gets no LOD 1, and its parent then merges its LOD 0 from the file.
+// Deterministic: a pure function of the record file and options.
 #pragma once
 
 #include <cstddef>
