@@ -302,36 +302,52 @@ ClusteredMesh build_clustered_mesh(const NodeMesh& mesh, const Clustering& clust
   // attribute quadrics, once the positions are known: every triangle's generalized quadric
   // (Garland & Heckbert 1998) added to the wedge of each of its solved corners as the block
   // the attribute solve needs with the wedge's position fixed (quadric.h, add_free_block: 44
-  // doubles per wedge with every attribute instead of the 78 of a whole quadric), packed in
-  // wedge order
+  // doubles per wedge with every attribute instead of the 78 of a whole quadric). The blocks
+  // are summed and solved a window of wedges at a time, one pass over the triangles per window
+  // (each block still sums its triangles in triangle order): the working set holds the blocks
+  // of 2048 wedges, or of a sixteenth of them in a larger node, instead of every wedge's (352
+  // bytes each), which were most of an internal node's peak memory.
   const int m = attribute_count;
   const std::size_t block_size = m > 0 ? free_block_doubles(m) : 0;
-  std::vector<std::uint32_t> block_slot(wedge_count, 0);
-  std::size_t solved_wedges = 0;
-  for (std::size_t w = 0; w < wedge_count; ++w)
-    if (solved(static_cast<std::uint32_t>(order[w]))) block_slot[w] = static_cast<std::uint32_t>(solved_wedges++);
-  std::vector<double> wedge_block(solved_wedges * block_size, 0.0);
-  for (std::size_t t = 0; m > 0 && t < triangle_count; ++t) {
-    const std::uint32_t* corner = &mesh.indices[3 * t];
-    if (!solved(corner[0]) && !solved(corner[1]) && !solved(corner[2])) continue;
-    const double area = triangle_area(t);
-    if (!(area > 0.0)) continue;
-    double p[3][kMaxQuadricDim];
-    for (int k = 0; k < 3; ++k) {
-      local_vertex(corner[k], p[k]);
-      for (int i = 0; i < 3; ++i) p[k][i] *= position_scale;
+  std::vector<std::uint32_t> slot_of_wedge(m > 0 ? wedge_count : 0, 0);  // among the solved wedges
+  std::uint32_t solved_wedges = 0;
+  for (std::size_t w = 0; w < slot_of_wedge.size(); ++w)
+    if (solved(static_cast<std::uint32_t>(order[w]))) slot_of_wedge[w] = solved_wedges++;
+  // wedges per window: at least kBlockWindow, at most kMaxBlockPasses passes over the triangles
+  constexpr std::size_t kBlockWindow = 2048, kMaxBlockPasses = 16;
+  const std::size_t window_size = std::max(kBlockWindow, (std::size_t{solved_wedges} + kMaxBlockPasses - 1) / kMaxBlockPasses);
+  std::vector<double> window_block;
+  auto sum_window_blocks = [&](std::size_t first_slot, std::size_t end_slot) {
+    window_block.assign((end_slot - first_slot) * block_size, 0.0);
+    auto in_window = [&](std::uint32_t v) {
+      if (!solved(v)) return false;
+      const std::uint32_t slot = slot_of_wedge[wedge[v]];
+      return slot >= first_slot && slot < end_slot;
+    };
+    for (std::size_t t = 0; t < triangle_count; ++t) {
+      const std::uint32_t* corner = &mesh.indices[3 * t];
+      if (!in_window(corner[0]) && !in_window(corner[1]) && !in_window(corner[2])) continue;
+      const double area = triangle_area(t);
+      if (!(area > 0.0)) continue;
+      double p[3][kMaxQuadricDim];
+      for (int k = 0; k < 3; ++k) {
+        local_vertex(corner[k], p[k]);
+        for (int i = 0; i < 3; ++i) p[k][i] *= position_scale;
+      }
+      double quadric_n[kMaxQuadricDoubles];
+      triangle_quadric(n, p[0], p[1], p[2], area, quadric_n);
+      for (int k = 0; k < 3; ++k) {
+        const std::uint32_t v = corner[k];
+        if (!in_window(v)) continue;
+        const std::uint32_t slot = slot_of_wedge[wedge[v]];
+        double x[3];
+        for (int i = 0; i < 3; ++i) x[i] = cluster_position[cluster[v] * 3 + static_cast<std::size_t>(i)] * position_scale;
+        add_free_block(n, 3, quadric_n, x, &window_block[(slot - first_slot) * block_size]);
+      }
     }
-    double quadric_n[kMaxQuadricDoubles];
-    triangle_quadric(n, p[0], p[1], p[2], area, quadric_n);
-    for (int k = 0; k < 3; ++k) {
-      const std::uint32_t v = corner[k];
-      if (!solved(v)) continue;
-      double x[3];
-      for (int i = 0; i < 3; ++i) x[i] = cluster_position[cluster[v] * 3 + static_cast<std::size_t>(i)] * position_scale;
-      add_free_block(n, 3, quadric_n, x, &wedge_block[block_slot[wedge[v]] * block_size]);
-    }
-  }
+  };
 
+  std::size_t window_end = 0;  // slots [window_end - window size, window_end) have their blocks
   for (std::size_t w = 0; w < wedge_count; ++w) {
     const auto root = static_cast<std::uint32_t>(order[w]);
     float* record = &wedge_record[w * stride];
@@ -350,15 +366,23 @@ ClusteredMesh build_clustered_mesh(const NodeMesh& mesh, const Clustering& clust
       continue;
     }
     if (attribute_count > 0) {
+      const std::uint32_t slot = slot_of_wedge[w];
+      if (slot >= window_end) {
+        const std::size_t first = slot;
+        window_end = std::min<std::size_t>(solved_wedges, first + window_size);
+        sum_window_blocks(first, window_end);
+      }
+      const std::size_t window_first = window_end - window_block.size() / block_size;
       double mean[kMaxQuadricDim];
       for (int i = 0; i < n; ++i) mean[i] = wedge_sum[w * stride + static_cast<std::size_t>(i)] / wedge_vertices[w];
-      minimize_free_block(m, &wedge_block[block_slot[w] * block_size], mean + 3, v + 3);
+      minimize_free_block(m, &window_block[(slot - window_first) * block_size], mean + 3, v + 3);
       finish_attributes(layout, layout.normal ? mean + 3 : nullptr, v + 3);
     }
     for (int i = 0; i < 3; ++i) v[i] = cluster_position[c * 3 + static_cast<std::size_t>(i)];
     for (int i = 0; i < 3; ++i) record[i] = static_cast<float>(v[i] + origin[static_cast<std::size_t>(i)]);
     for (int i = 3; i < n; ++i) record[i] = static_cast<float>(v[i]);
   }
+  window_block = {};
 
   // candidate triangles: sources counted per cluster triple
   FlatHashMap<3> candidate_of(triangle_count);
