@@ -41,8 +41,8 @@ void add_bake_command(CLI::App& app, CommandContext& context) {
   command
       ->add_option("--max-depth", args->max_depth,
                    "Deepest octree level (root = 0); leaves there keep all their triangles, "
-                   "and the bake stops (exit 1) when one holds more than a quarter of --memory "
-                   "can simplify: raise --max-depth or --memory")
+                   "and one holding more than a quarter of --memory can simplify in memory is "
+                   "built streaming from a temporary file (slower per triangle)")
       ->capture_default_str()
       ->check(CLI::Range(0u, 21u));
   command
