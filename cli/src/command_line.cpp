@@ -42,7 +42,7 @@ void add_bake_command(CLI::App& app, CommandContext& context) {
       ->add_option("--max-depth", args->max_depth,
                    "Deepest octree level (root = 0); leaves there keep all their triangles, "
                    "and one holding more than a quarter of --memory can simplify in memory is "
-                   "built streaming from a temporary file (slower per triangle)")
+                   "built streaming from a temporary file (its LOD 1 at most that many triangles)")
       ->capture_default_str()
       ->check(CLI::Range(0u, 21u));
   command

@@ -67,8 +67,9 @@ struct BakeOptions {
   // that cap, not by the leaf): LOD 0 its original triangles, stored per chunk of that many
   // (a vertex shared by two chunks is stored twice), LOD 1 a vertex clustering of at most that
   // many triangles (and half the leaf) with the leaf's boundary kept and per-cell attributes
-  // (attribute seams inside a cell are averaged), the rest of the chain from LOD 1. Slower per
-  // triangle than in-memory leaves: raise max_depth for dense models when that matters.
+  // (attribute seams inside a cell are averaged), the rest of the chain from LOD 1: a coarser
+  // first step than an in-memory leaf's halving; raise max_depth for dense models when that
+  // matters.
   std::uint32_t max_depth = 10;
   // Cap on the bake's buffers together (soup stage, octree sort, leaf buffers); the peak RSS is
   // this plus the program's fixed footprint (and the share of leaves at max_depth larger than
