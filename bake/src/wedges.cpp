@@ -306,7 +306,7 @@ ClusteredMesh build_clustered_mesh(const NodeMesh& mesh, const Clustering& clust
   // are summed and solved a window of wedges at a time, one pass over the triangles per window
   // (each block still sums its triangles in triangle order): the working set holds the blocks
   // of 2048 wedges, or of a sixteenth of them in a larger node, instead of every wedge's (352
-  // bytes each), which were most of an internal node's peak memory.
+  // bytes each: the largest single array of an internal node's working set).
   const int m = attribute_count;
   const std::size_t block_size = m > 0 ? free_block_doubles(m) : 0;
   std::vector<std::uint32_t> slot_of_wedge(m > 0 ? wedge_count : 0, 0);  // among the solved wedges
