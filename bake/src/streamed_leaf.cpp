@@ -75,11 +75,8 @@ struct Survey {
   double area = 0.0;
 };
 
-double triangle_area(const float* p0, const float* p1, const float* p2) {
-  const double e1[3] = {double(p1[0]) - p0[0], double(p1[1]) - p0[1], double(p1[2]) - p0[2]};
-  const double e2[3] = {double(p2[0]) - p0[0], double(p2[1]) - p0[1], double(p2[2]) - p0[2]};
-  const double n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
-  return 0.5 * std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+double triangle_area(const std::array<double, 3>& normal) {  // from triangle_normal
+  return 0.5 * std::sqrt(normal[0] * normal[0] + normal[1] * normal[1] + normal[2] * normal[2]);
 }
 
 // The corners of one soup record.
@@ -122,7 +119,7 @@ class StreamedLeafBuilder {
             if (!std::isfinite(c.vertex[static_cast<std::size_t>(k)][static_cast<std::size_t>(i)]))
               return bad_input_error(records_.string() + ": record " + std::to_string(first + r) +
                                      ": non-finite position");
-        survey_.area += triangle_area(c.vertex[0].data(), c.vertex[1].data(), c.vertex[2].data());
+        survey_.area += triangle_area(triangle_normal(c.vertex[0].data(), c.vertex[1].data(), c.vertex[2].data()));
         if (!edge_writer) continue;
         for (std::size_t k = 0; k < 3; ++k) {
           Position a = position_bits(c.vertex[k].data()), b = position_bits(c.vertex[(k + 1) % 3].data());
@@ -291,11 +288,8 @@ class StreamedLeafBuilder {
         std::array<std::uint32_t, 3> id;
         for (std::size_t k = 0; k < 3; ++k) id[k] = cluster_id(c.vertex[k].data());
         const float* p[3] = {c.vertex[0].data(), c.vertex[1].data(), c.vertex[2].data()};
-        const std::array<double, 3> e1{double(p[1][0]) - p[0][0], double(p[1][1]) - p[0][1], double(p[1][2]) - p[0][2]};
-        const std::array<double, 3> e2{double(p[2][0]) - p[0][0], double(p[2][1]) - p[0][1], double(p[2][2]) - p[0][2]};
-        const std::array<double, 3> normal{e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2],
-                                           e1[0] * e2[1] - e1[1] * e2[0]};
-        const double a = 0.5 * std::sqrt(normal[0] * normal[0] + normal[1] * normal[1] + normal[2] * normal[2]);
+        const std::array<double, 3> normal = triangle_normal(p[0], p[1], p[2]);
+        const double a = triangle_area(normal);
         double plane[q3] = {};
         const double p0[3] = {double(p[0][0]) - origin_[0], double(p[0][1]) - origin_[1], double(p[0][2]) - origin_[2]};
         if (a > 0.0) plane_quadric(normal.data(), p0, a, plane);
@@ -313,7 +307,7 @@ class StreamedLeafBuilder {
         if (id[0] == id[1] || id[1] == id[2] || id[0] == id[2]) continue;
         std::array<std::uint32_t, 3> sorted = id;
         std::sort(sorted.begin(), sorted.end());
-        const bool even = (id[0] < id[1]) + (id[1] < id[2]) + (id[2] < id[0]) == 2;
+        const bool even = winds_like_sorted(id[0], id[1], id[2]);
         // the count pass at g saw the same distinct triples (its keys, one to one with the ids)
         assert((candidates.size() < 2 * limit || candidate_of.find(sorted) != FlatHashMap<3>::kMissing) &&
                "more cluster triples than the count pass at this resolution found");
@@ -377,18 +371,9 @@ class StreamedLeafBuilder {
     for (const Candidate& candidate : candidates) {
       if (candidate.count % 2 == 0) continue;
       std::array<std::uint32_t, 3> ref = candidate.vertex;
-      const float* pos[3] = {record_of(ref[0]), record_of(ref[1]), record_of(ref[2])};
-      if (std::memcmp(pos[0], pos[1], 12) == 0 || std::memcmp(pos[1], pos[2], 12) == 0 ||
-          std::memcmp(pos[0], pos[2], 12) == 0)
-        continue;
-      const std::array<double, 3> e1{double(pos[1][0]) - pos[0][0], double(pos[1][1]) - pos[0][1], double(pos[1][2]) - pos[0][2]};
-      const std::array<double, 3> e2{double(pos[2][0]) - pos[0][0], double(pos[2][1]) - pos[0][1], double(pos[2][2]) - pos[0][2]};
-      const std::array<double, 3> n{e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
+      const std::array<const float*, 3> corner_records{record_of(ref[0]), record_of(ref[1]), record_of(ref[2])};
       const std::array<std::uint32_t, 3>& id = candidate.cluster;
-      const bool even = (id[0] < id[1]) + (id[1] < id[2]) + (id[2] < id[0]) == 2;
-      const double agreement = (even ? 1.0 : -1.0) *
-          (n[0] * candidate.normal[0] + n[1] * candidate.normal[1] + n[2] * candidate.normal[2]);
-      if (agreement < 0.0) std::swap(ref[1], ref[2]);
+      if (!orient_kept_triangle(corner_records, winds_like_sorted(id[0], id[1], id[2]), candidate.normal, ref)) continue;
       for (std::uint32_t r : ref) {
         auto [it, inserted] = output_of_ref.try_emplace(r, static_cast<std::uint32_t>(lod.vertex_count()));
         if (inserted) {

@@ -124,18 +124,31 @@ NodeMesh weld_identical_vertices(const NodeMesh& mesh) {
   return out;
 }
 
+std::array<double, 3> triangle_normal(const float* p0, const float* p1, const float* p2) {
+  const std::array<double, 3> e1{double(p1[0]) - p0[0], double(p1[1]) - p0[1], double(p1[2]) - p0[2]};
+  const std::array<double, 3> e2{double(p2[0]) - p0[0], double(p2[1]) - p0[1], double(p2[2]) - p0[2]};
+  return cross(e1, e2);
+}
+
 std::vector<std::array<double, 3>> face_normals(const NodeMesh& mesh) {
   const std::size_t stride = mesh.layout.floats();
   std::vector<std::array<double, 3>> normals(mesh.triangle_count());
-  for (std::size_t t = 0; t < normals.size(); ++t) {
-    const float* p0 = &mesh.vertices[mesh.indices[3 * t] * stride];
-    const float* p1 = &mesh.vertices[mesh.indices[3 * t + 1] * stride];
-    const float* p2 = &mesh.vertices[mesh.indices[3 * t + 2] * stride];
-    const std::array<double, 3> e1{double(p1[0]) - p0[0], double(p1[1]) - p0[1], double(p1[2]) - p0[2]};
-    const std::array<double, 3> e2{double(p2[0]) - p0[0], double(p2[1]) - p0[1], double(p2[2]) - p0[2]};
-    normals[t] = cross(e1, e2);
-  }
+  for (std::size_t t = 0; t < normals.size(); ++t)
+    normals[t] = triangle_normal(&mesh.vertices[mesh.indices[3 * t] * stride], &mesh.vertices[mesh.indices[3 * t + 1] * stride],
+                                 &mesh.vertices[mesh.indices[3 * t + 2] * stride]);
   return normals;
+}
+
+bool orient_kept_triangle(const std::array<const float*, 3>& record, bool even,
+                          const std::array<double, 3>& source_normal, std::array<std::uint32_t, 3>& corner) {
+  if (std::memcmp(record[0], record[1], 12) == 0 || std::memcmp(record[1], record[2], 12) == 0 ||
+      std::memcmp(record[0], record[2], 12) == 0)
+    return false;
+  const std::array<double, 3> normal = triangle_normal(record[0], record[1], record[2]);
+  const double agreement = (even ? 1.0 : -1.0) * (normal[0] * source_normal[0] + normal[1] * source_normal[1] +
+                                                  normal[2] * source_normal[2]);
+  if (agreement < 0.0) std::swap(corner[1], corner[2]);
+  return true;
 }
 
 void add_plane_quadrics(const NodeMesh& mesh, std::span<const std::array<double, 3>> normals,
@@ -394,8 +407,7 @@ ClusteredMesh build_clustered_mesh(const NodeMesh& mesh, const Clustering& clust
     if (c0 == c1 || c1 == c2 || c0 == c2) continue;
     std::array<std::uint32_t, 3> sorted{c0, c1, c2};
     std::sort(sorted.begin(), sorted.end());
-    // the source's winding agrees with the sorted triple's iff it is an even permutation of it
-    const bool even = (c0 < c1) + (c1 < c2) + (c2 < c0) == 2;
+    const bool even = winds_like_sorted(c0, c1, c2);
     bool inserted = false;
     const std::uint32_t index =
         candidate_of.find_or_insert(sorted, static_cast<std::uint32_t>(candidates.size()), inserted);
@@ -417,19 +429,11 @@ ClusteredMesh build_clustered_mesh(const NodeMesh& mesh, const Clustering& clust
     if (candidate.count % 2 == 0) continue;
     const std::uint32_t* corner = &mesh.indices[3 * static_cast<std::size_t>(candidate.first_triangle)];
     std::array<std::uint32_t, 3> w{wedge[corner[0]], wedge[corner[1]], wedge[corner[2]]};
-    const float* pos[3];
-    for (int k = 0; k < 3; ++k) pos[k] = &wedge_record[w[static_cast<std::size_t>(k)] * stride];
-    if (std::memcmp(pos[0], pos[1], 12) == 0 || std::memcmp(pos[1], pos[2], 12) == 0 ||
-        std::memcmp(pos[0], pos[2], 12) == 0)
+    const std::array<const float*, 3> record{&wedge_record[w[0] * stride], &wedge_record[w[1] * stride],
+                                             &wedge_record[w[2] * stride]};
+    if (!orient_kept_triangle(record, winds_like_sorted(cluster[corner[0]], cluster[corner[1]], cluster[corner[2]]),
+                              candidate.normal, w))
       continue;
-    const std::array<double, 3> e1{double(pos[1][0]) - pos[0][0], double(pos[1][1]) - pos[0][1], double(pos[1][2]) - pos[0][2]};
-    const std::array<double, 3> e2{double(pos[2][0]) - pos[0][0], double(pos[2][1]) - pos[0][1], double(pos[2][2]) - pos[0][2]};
-    const std::array<double, 3> normal = cross(e1, e2);
-    const std::uint32_t c0 = cluster[corner[0]], c1 = cluster[corner[1]], c2 = cluster[corner[2]];
-    const bool even = (c0 < c1) + (c1 < c2) + (c2 < c0) == 2;
-    const double agreement = (even ? 1.0 : -1.0) *
-        (normal[0] * candidate.normal[0] + normal[1] * candidate.normal[1] + normal[2] * candidate.normal[2]);
-    if (agreement < 0.0) std::swap(w[1], w[2]);
     output_of_candidate[ci] = static_cast<std::uint32_t>(kept.size() / 3);
     kept.insert(kept.end(), w.begin(), w.end());
   }

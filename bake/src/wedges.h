@@ -78,9 +78,27 @@ struct ClusteredMesh {
 ClusteredMesh build_clustered_mesh(const NodeMesh& mesh, const Clustering& clustering,
                                    const std::array<double, 3>& origin);
 
-// Per triangle of `mesh`: the cross product of its edges from corner 0, in double from the
-// model-unit floats (its normal times twice its area).
+// The cross product of the edges from p0 of the triangle (p0, p1, p2), each the position (first
+// three floats, model units) of a vertex record, in double: its normal times twice its area.
+std::array<double, 3> triangle_normal(const float* p0, const float* p1, const float* p2);
+
+// triangle_normal of every triangle of `mesh`.
 std::vector<std::array<double, 3>> face_normals(const NodeMesh& mesh);
+
+// The mod-2 output rule's orientation (build_clustered_mesh): a source triangle whose corners
+// fall in the distinct clusters (c0, c1, c2) winds like their sorted triple iff (c0, c1, c2)
+// is an even permutation of it.
+inline bool winds_like_sorted(std::uint32_t c0, std::uint32_t c1, std::uint32_t c2) {
+  return (c0 < c1) + (c1 < c2) + (c2 < c0) == 2;
+}
+
+// A kept cluster triple's triangle with corners `corner` at the vertex records `record`, first
+// source winding like the sorted triple iff `even`, its sources' area-weighted normals summed
+// in the sorted triple's winding in `source_normal`: false when two corners have bit-identical
+// positions (the triangle is dropped), else true with corners 1 and 2 swapped where its normal
+// disagrees with its sources' (re-wound, not dropped: dropping would open the surface).
+bool orient_kept_triangle(const std::array<const float*, 3>& record, bool even,
+                          const std::array<double, 3>& source_normal, std::array<std::uint32_t, 3>& corner);
 
 // The position quadrics of a clustering: every triangle with a positive area adds its plane
 // quadric (quadric.h, n = 3; the plane through corner 0 relative to `origin`, model units)
