@@ -144,23 +144,30 @@ Result<NodeMesh> decode_node_file(std::span<const std::byte> bytes, std::string_
   return mesh;
 }
 
+namespace {
+
+// write(2) of all of `bytes`, again after EINTR: 0, or the errno of the failure (EIO for a write
+// that wrote nothing).
+int write_all(int fd, std::span<const std::byte> bytes) {
+  std::size_t done = 0;
+  while (done < bytes.size()) {
+    const ssize_t n = ::write(fd, bytes.data() + done, bytes.size() - done);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) return n < 0 ? errno : EIO;
+    done += static_cast<std::size_t>(n);
+  }
+  return 0;
+}
+
+}  // namespace
+
 Status write_node_file(const std::filesystem::path& path, const NodeMesh& mesh) {
   // One write(2) of the encoded bytes (no stdio buffer, whose setup costs an fstat per file: a
   // bake writes thousands of small files).
   const std::vector<std::byte> bytes = encode_node_file(mesh);
   const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
   if (fd < 0) return io_error(path.string() + ": cannot create: " + std::strerror(errno));
-  std::size_t done = 0;
-  int write_errno = 0;
-  while (done < bytes.size()) {
-    const ssize_t n = ::write(fd, bytes.data() + done, bytes.size() - done);
-    if (n < 0 && errno == EINTR) continue;
-    if (n <= 0) {
-      write_errno = n < 0 ? errno : EIO;
-      break;
-    }
-    done += static_cast<std::size_t>(n);
-  }
+  int write_errno = write_all(fd, bytes);
   if (::close(fd) != 0 && write_errno == 0) write_errno = errno;
   if (write_errno != 0) {
     std::error_code ignored;
@@ -217,16 +224,9 @@ void NodeFileWriter::abandon() {
 }
 
 Status NodeFileWriter::write_buffer() {
-  std::size_t done = 0;
-  while (done < buffer_.size()) {
-    const ssize_t n = ::write(fd_, buffer_.data() + done, buffer_.size() - done);
-    if (n < 0 && errno == EINTR) continue;
-    if (n <= 0) {
-      const int error = n < 0 ? errno : EIO;
-      abandon();
-      return io_error(path_.string() + ": write failed: " + std::strerror(error));
-    }
-    done += static_cast<std::size_t>(n);
+  if (const int error = write_all(fd_, buffer_)) {
+    abandon();
+    return io_error(path_.string() + ": write failed: " + std::strerror(error));
   }
   written_ += buffer_.size();
   buffer_.clear();
