@@ -187,15 +187,20 @@ void expect_clean(const NodeMesh& mesh) {
         ASSERT_LE(f[layout.color_offset() + i], 1.0f);
       }
   }
-  std::set<std::array<PositionKey, 3>> seen;
+  // A duplicate is the same corners wound the same way; the same corners wound both ways are a
+  // two-sided sheet (wedges.h, kept_copies), at most one such pair per corner triple.
+  std::set<std::array<PositionKey, 3>> seen;  // corners rotated to start at the smallest
+  std::map<std::array<PositionKey, 3>, int> uses;  // per sorted corner triple
   for (std::size_t t = 0; t < mesh.triangle_count(); ++t) {
     std::array<PositionKey, 3> corners{position_key(mesh, mesh.indices[3 * t]), position_key(mesh, mesh.indices[3 * t + 1]),
                                        position_key(mesh, mesh.indices[3 * t + 2])};
     ASSERT_NE(corners[0], corners[1]) << "degenerate triangle " << t;
     ASSERT_NE(corners[1], corners[2]) << "degenerate triangle " << t;
     ASSERT_NE(corners[0], corners[2]) << "degenerate triangle " << t;
-    std::sort(corners.begin(), corners.end());
+    std::rotate(corners.begin(), std::min_element(corners.begin(), corners.end()), corners.end());
     ASSERT_TRUE(seen.insert(corners).second) << "duplicate triangle " << t;
+    std::sort(corners.begin(), corners.end());
+    ASSERT_LE(++uses[corners], 2) << "triangle " << t << " is a third copy of its corners";
   }
 }
 
@@ -631,6 +636,52 @@ TEST(SimplifyTest, GridFinerThanTheVerticesKeepsTheInput) {
       EXPECT_NEAR(result.mesh.vertices[v * stride + i], input.vertices[found->second * stride + i], 1e-6f);
   }
   EXPECT_EQ(result.error_bound, 0.0);
+}
+
+TEST(SimplifyTest, GridKeepsAThinSheetTwoSided) {
+  // A closed pillow: the unit square's top face (interior lifted to z = 0.01, normal +z) and its
+  // bottom face (z = 0, normal -z, wound the other way) meet at the rim. With 4 x 4 cells both
+  // faces fall into the same cells: every cluster triple gets sources of both windings, which
+  // the mod-2 image would cancel (the pillow would vanish). It is kept two-sided instead: each
+  // triangle with its reverse, each face with its own side's normals, still closed.
+  const VertexLayout layout{true, false, false};
+  NodeMesh top = plane_grid(8, layout), bottom = plane_grid(8, layout);
+  const std::size_t stride = layout.floats();
+  for (std::size_t v = 0; v < top.vertex_count(); ++v) {
+    const float x = top.vertices[v * stride], y = top.vertices[v * stride + 1];
+    const bool rim = x == 0.0f || y == 0.0f || x == 1.0f || y == 1.0f;
+    if (!rim) top.vertices[v * stride + 2] = 0.01f;
+    bottom.vertices[v * stride + 5] = -1.0f;
+  }
+  for (std::size_t t = 0; t < bottom.triangle_count(); ++t) std::swap(bottom.indices[3 * t + 1], bottom.indices[3 * t + 2]);
+  const NodeMesh* faces[2] = {&top, &bottom};
+  const NodeMesh pillow = merge_meshes(faces);
+  ASSERT_TRUE(odd_edges(pillow).empty());
+
+  const SimplifyResult result = simplify(pillow, pillow.bounds(), grid_resolution(4));
+  const NodeMesh& out = result.mesh;
+  ASSERT_GT(out.triangle_count(), 0u) << "the sheet was cancelled";
+  EXPECT_EQ(out.triangle_count() % 2, 0u);
+  expect_clean(out);
+  EXPECT_TRUE(odd_edges(out).empty());
+  std::set<std::array<PositionKey, 3>> oriented;
+  for (std::size_t t = 0; t < out.triangle_count(); ++t) {
+    std::array<PositionKey, 3> corners{position_key(out, out.indices[3 * t]), position_key(out, out.indices[3 * t + 1]),
+                                       position_key(out, out.indices[3 * t + 2])};
+    std::rotate(corners.begin(), std::min_element(corners.begin(), corners.end()), corners.end());
+    oriented.insert(corners);
+    const std::array<double, 3> normal = face_normal(out, t);
+    for (std::size_t k = 0; k < 3; ++k) {
+      const float* n = &out.vertices[out.indices[3 * t + k] * stride + 3];
+      EXPECT_GT(normal[0] * n[0] + normal[1] * n[1] + normal[2] * n[2], 0.0)
+          << "triangle " << t << " carries the other side's normal at corner " << k;
+    }
+  }
+  for (std::array<PositionKey, 3> corners : oriented) {
+    std::swap(corners[1], corners[2]);
+    std::rotate(corners.begin(), std::min_element(corners.begin(), corners.end()), corners.end());
+    EXPECT_TRUE(oriented.count(corners)) << "a triangle without its reverse";
+  }
 }
 
 // ---- grid quality ---------------------------------------------------------------------------

@@ -159,18 +159,19 @@ std::size_t coarsest_count_bound(const PreparedNode& node) {
 }
 
 // Triangles the clustering given by per-vertex cluster ids keeps (before the rare drop of
-// triangles whose corners coincide after rounding): parity per cluster triple, the number of
-// triples seen an odd number of times (build_clustered_mesh's rule), without solving any quadric.
+// triangles whose corners coincide after rounding): build_clustered_mesh's rule per cluster
+// triple (KeptTriangleCounter), without solving any quadric.
 std::size_t count_kept_triangles(const PreparedNode& node, const std::vector<std::uint32_t>& cluster) {
-  OddKeyCounter<3> parity(node.mesh.triangle_count());
+  KeptTriangleCounter<3> counter(node.mesh.triangle_count());
   for (std::size_t t = 0; t < node.mesh.triangle_count(); ++t) {
-    std::array<std::uint32_t, 3> triple{cluster[node.mesh.indices[3 * t]], cluster[node.mesh.indices[3 * t + 1]],
-                                        cluster[node.mesh.indices[3 * t + 2]]};
+    const std::uint32_t* corner = &node.mesh.indices[3 * t];
+    const std::uint32_t c0 = cluster[corner[0]], c1 = cluster[corner[1]], c2 = cluster[corner[2]];
+    if (c0 == c1 || c1 == c2 || c0 == c2) continue;
+    std::array<std::uint32_t, 3> triple{c0, c1, c2};
     std::sort(triple.begin(), triple.end());
-    if (triple[0] == triple[1] || triple[1] == triple[2]) continue;
-    parity.toggle(triple);
+    counter.add(triple, winds_like_sorted(c0, c1, c2));
   }
-  return parity.odd();
+  return counter.kept();
 }
 
 // The clustering of per-vertex keys of `coarse` (and of `fine` where kFineKey is set): clusters

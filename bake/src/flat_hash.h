@@ -90,33 +90,6 @@ class FlatHashMap {
   std::vector<Slot> slots_;
 };
 
-// How many keys of W words have been toggled an odd number of times: the cluster triples whose
-// triangles survive a clustering's mod-2 rule (build_clustered_mesh), counted without building
-// the mesh.
-template <std::size_t W>
-class OddKeyCounter {
- public:
-  using Key = typename FlatHashMap<W>::Key;
-  // Room for `max_keys` distinct keys.
-  explicit OddKeyCounter(std::size_t max_keys) : table_(max_keys) {}
-  void toggle(const Key& key) {
-    bool inserted = false;
-    const std::uint32_t index = table_.find_or_insert(key, static_cast<std::uint32_t>(odd_.size()), inserted);
-    if (inserted) odd_.push_back(0);
-    odd_[index] ^= 1u;
-    if (odd_[index]) ++count_;
-    else --count_;
-  }
-  bool contains(const Key& key) const { return table_.find(key) != FlatHashMap<W>::kMissing; }
-  std::size_t distinct() const { return odd_.size(); }
-  std::size_t odd() const { return count_; }
-
- private:
-  FlatHashMap<W> table_;
-  std::vector<std::uint8_t> odd_;  // per key in order of first toggle
-  std::size_t count_ = 0;
-};
-
 // Set of ids (e.g. vertex ids) whose identity is decided by the caller's `hash(id)` and
 // `equal(id, id)`: finds the first inserted id equal to a new one.
 class FlatIdSet {

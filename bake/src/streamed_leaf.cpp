@@ -249,9 +249,11 @@ class StreamedLeafBuilder {
     std::vector<float> locked_records;
     struct Candidate {
       std::uint32_t count = 0;
+      std::uint32_t like_sorted = 0;           // sources winding like the sorted triple
       std::array<std::uint32_t, 3> vertex{};  // output vertex refs of the first source
       std::array<std::uint32_t, 3> cluster{};  // the first source's clusters, its winding
       std::array<double, 3> normal{};          // area-weighted, in the sorted triple's winding
+      std::array<double, 3> like_normal{};     // the same, of the sources winding like it
     };
     constexpr std::uint32_t kLockedRef = 1u << 31;
     FlatHashMap<3> candidate_of(2 * limit);
@@ -321,7 +323,10 @@ class StreamedLeafBuilder {
         }
         Candidate& candidate = candidates[index];
         ++candidate.count;
+        candidate.like_sorted += even;
         for (std::size_t i = 0; i < 3; ++i) candidate.normal[i] += even ? normal[i] : -normal[i];
+        if (even)
+          for (std::size_t i = 0; i < 3; ++i) candidate.like_normal[i] += normal[i];
       }
       return {};
     }));
@@ -361,19 +366,16 @@ class StreamedLeafBuilder {
       for (std::size_t i = 3; i < stride; ++i) out[i] = static_cast<float>(v[i]);
     }
 
-    // output: odd candidates, oriented like their sources, vertices in order of first use
+    // output: kept_copies per candidate, oriented like their sources (a two-sided pair: the
+    // copy facing like the sources that wind like the sorted triple, and its reverse; both with
+    // the clusters' one attribute vector), vertices in order of first use
     NodeMesh lod;
     lod.layout = layout_;
     std::unordered_map<std::uint32_t, std::uint32_t> output_of_ref;
     auto record_of = [&](std::uint32_t ref) {
       return ref & kLockedRef ? &locked_records[(ref & ~kLockedRef) * stride] : &representative[ref * stride];
     };
-    for (const Candidate& candidate : candidates) {
-      if (candidate.count % 2 == 0) continue;
-      std::array<std::uint32_t, 3> ref = candidate.vertex;
-      const std::array<const float*, 3> corner_records{record_of(ref[0]), record_of(ref[1]), record_of(ref[2])};
-      const std::array<std::uint32_t, 3>& id = candidate.cluster;
-      if (!orient_kept_triangle(corner_records, winds_like_sorted(id[0], id[1], id[2]), candidate.normal, ref)) continue;
+    auto emit = [&](const std::array<std::uint32_t, 3>& ref) {
       for (std::uint32_t r : ref) {
         auto [it, inserted] = output_of_ref.try_emplace(r, static_cast<std::uint32_t>(lod.vertex_count()));
         if (inserted) {
@@ -382,6 +384,19 @@ class StreamedLeafBuilder {
         }
         lod.indices.push_back(it->second);
       }
+    };
+    for (const Candidate& candidate : candidates) {
+      const unsigned copies = kept_copies(candidate.count % 2 == 1, candidate.like_sorted > 0,
+                                          candidate.like_sorted < candidate.count);
+      if (copies == 0) continue;
+      std::array<std::uint32_t, 3> ref = candidate.vertex;
+      const std::array<const float*, 3> corner_records{record_of(ref[0]), record_of(ref[1]), record_of(ref[2])};
+      const std::array<std::uint32_t, 3>& id = candidate.cluster;
+      if (!orient_kept_triangle(corner_records, winds_like_sorted(id[0], id[1], id[2]),
+                                copies == 1 ? candidate.normal : candidate.like_normal, ref))
+        continue;
+      emit(ref);
+      if (copies == 2) emit({ref[0], ref[2], ref[1]});
     }
     return lod;
   }
@@ -453,35 +468,36 @@ class StreamedLeafBuilder {
     return cells.key(vertex);
   }
 
-  // Triangles the clustering at g keeps (the parity rule), or nothing when the distinct
-  // cluster triples pass 2 x limit (memory stays bounded; the resolution is too fine).
+  // Triangles the clustering at g keeps (build_clustered_mesh's rule), or nothing when the
+  // distinct cluster triples pass 2 x limit (memory stays bounded; the resolution is too fine).
   Result<std::optional<std::uint64_t>> count_triangles(std::uint32_t g, std::uint64_t limit) {
     const GridCellKeys cells(make_domain(g), origin_);
-    OddKeyCounter<6> parity(static_cast<std::size_t>(2 * limit));
+    KeptTriangleCounter<6> counter(static_cast<std::size_t>(2 * limit));
     bool over = false;
     OCTOLOD_RETURN_IF_ERROR(for_each_chunk(records_, record_bytes_, options_.chunk_triangles,
                                            [&](std::span<const std::byte> chunk) -> Status {
       for (std::size_t r = 0; r < chunk.size() / record_bytes_ && !over; ++r) {
         const Corners c = load_corners(chunk.data() + r * record_bytes_, layout_);
-        std::array<std::uint64_t, 3> key{key_of(cells, c.vertex[0].data()), key_of(cells, c.vertex[1].data()),
-                                         key_of(cells, c.vertex[2].data())};
+        const std::array<std::uint64_t, 3> id{key_of(cells, c.vertex[0].data()), key_of(cells, c.vertex[1].data()),
+                                              key_of(cells, c.vertex[2].data())};
+        std::array<std::uint64_t, 3> key = id;
         std::sort(key.begin(), key.end());
         if (key[0] == key[1] || key[1] == key[2]) continue;
-        OddKeyCounter<6>::Key words;
+        KeptTriangleCounter<6>::Key words;
         for (std::size_t k = 0; k < 3; ++k) {
           words[2 * k] = static_cast<std::uint32_t>(key[k] >> 32);
           words[2 * k + 1] = static_cast<std::uint32_t>(key[k]);
         }
-        if (parity.distinct() >= 2 * limit && !parity.contains(words)) {
+        if (counter.distinct() >= 2 * limit && !counter.contains(words)) {
           over = true;
           break;
         }
-        parity.toggle(words);
+        counter.add(words, winds_like_sorted(id[0], id[1], id[2]));
       }
       return {};
     }));
     if (over) return std::optional<std::uint64_t>{};
-    return std::optional<std::uint64_t>{parity.odd()};
+    return std::optional<std::uint64_t>{counter.kept()};
   }
 
   fs::path records_;

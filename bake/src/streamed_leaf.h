@@ -17,8 +17,8 @@
 //          the in-memory grid (place_representative), its attributes are the area-weighted mean
 //          of its corners' (normals renormalized, colours clamped: seams inside a cell are
 //          averaged, unlike the in-memory grid's wedges). Triangles whose corners fall in three
-//          distinct clusters survive once when their cluster triple is seen an odd number of
-//          times (build_clustered_mesh's rule). The resolution is searched by counting passes
+//          distinct clusters survive as build_clustered_mesh's rule keeps them (kept_copies
+//          per cluster triple: once when odd, a two-sided pair for a folded sheet). The resolution is searched by counting passes
 //          (a resolution whose distinct cluster triples pass twice the limit counts as too
 //          fine, so memory stays bounded by the limit) for at most min(max_lod1_triangles,
 //          half the input) triangles. Its error bound is the max over chunks of

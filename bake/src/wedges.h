@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "error_bound.h"
+#include "flat_hash.h"
 #include "octolod/formats/node_file.h"
 
 namespace octolod::bake {
@@ -50,15 +51,17 @@ void place_representative(const double* quadric, const double* mean, const Clamp
 
 // Builds the clustered mesh. `origin` (model units) is subtracted from positions for the quadric
 // arithmetic; clamp boxes are relative to it. Triangles: a triangle survives when its corners are
-// in three distinct clusters; the surviving triangles are counted per cluster triple and kept
-// once when the count is odd, dropped when even (the output is the mod-2 image of the input, so
-// its boundary is exactly the image of the input's boundary: nothing opens, and a sheet folded
-// onto itself cancels instead of becoming two coincident faces). A kept triangle takes its
-// wedges from its first source triangle, and the orientation whose normal agrees with the
-// area-weighted normals of its source triangles (flipped triangles are re-wound, not dropped:
-// dropping would open the surface). Triangles with two corners at bit-identical positions are
-// dropped (their edges cancel mod 2). Unused vertices are removed; output vertices are in
-// (cluster, smallest vertex id of the wedge) order.
+// in three distinct clusters; the surviving triangles are grouped per cluster triple, and each
+// triple keeps kept_copies of them (below): the output is the mod-2 image of the input plus
+// two-sided sheets, so its boundary (edges used an odd number of times) is exactly the image of
+// the input's boundary and nothing opens. A kept triangle takes its wedges from its first source
+// triangle, and the orientation whose normal agrees with the area-weighted normals of its source
+// triangles (flipped triangles are re-wound, not dropped: dropping would open the surface); of a
+// two-sided pair, the copy facing like the sources that wind like the sorted triple takes the
+// first such source's wedges, the other copy the first opposite source's, wound the other way.
+// Triangles with two corners at bit-identical positions are dropped (their edges cancel mod 2).
+// Unused vertices are removed; output vertices are in (cluster, smallest vertex id of the wedge)
+// order.
 inline constexpr std::uint32_t kNoTriangle = 0xFFFFFFFFu;
 struct ClusteredMesh {
   NodeMesh mesh;
@@ -88,9 +91,53 @@ std::vector<std::array<double, 3>> face_normals(const NodeMesh& mesh);
 // The mod-2 output rule's orientation (build_clustered_mesh): a source triangle whose corners
 // fall in the distinct clusters (c0, c1, c2) winds like their sorted triple iff (c0, c1, c2)
 // is an even permutation of it.
-inline bool winds_like_sorted(std::uint32_t c0, std::uint32_t c1, std::uint32_t c2) {
+template <class Id>
+bool winds_like_sorted(Id c0, Id c1, Id c2) {
   return (c0 < c1) + (c1 < c2) + (c2 < c0) == 2;
 }
+
+// How many triangles build_clustered_mesh keeps for one cluster triple: one when its sources
+// are odd in number (the mod-2 image); two, wound opposite ways, when they are even and both
+// windings occur among them (a thin sheet, e.g. a wall whose two faces fall into the same
+// cells, is kept two-sided: cancelling it would drop its whole area, and the pair adds nothing
+// to the boundary mod 2); none when they are even and all wind the same way (a surface folded
+// onto itself twice).
+inline unsigned kept_copies(bool odd, bool like_sorted_seen, bool opposite_seen) {
+  if (odd) return 1;
+  return like_sorted_seen && opposite_seen ? 2 : 0;
+}
+
+// Triangles the output rule keeps (kept_copies summed over the triples), counted from the
+// sources without building the mesh: what the resolution searches evaluate.
+template <std::size_t W>
+class KeptTriangleCounter {
+ public:
+  using Key = typename FlatHashMap<W>::Key;
+  // Room for `max_keys` distinct triples.
+  explicit KeptTriangleCounter(std::size_t max_keys) : table_(max_keys) {}
+  // One source of the triple `key`, winding like its sorted order or not.
+  void add(const Key& key, bool like_sorted) {
+    bool inserted = false;
+    const std::uint32_t index = table_.find_or_insert(key, static_cast<std::uint32_t>(state_.size()), inserted);
+    if (inserted) state_.push_back(0);
+    std::uint8_t& state = state_[index];
+    kept_ -= copies(state);
+    state = static_cast<std::uint8_t>((state ^ kOdd) | (like_sorted ? kLike : kOpposite));
+    kept_ += copies(state);
+  }
+  bool contains(const Key& key) const { return table_.find(key) != FlatHashMap<W>::kMissing; }
+  std::size_t distinct() const { return state_.size(); }
+  std::size_t kept() const { return kept_; }
+
+ private:
+  static constexpr std::uint8_t kOdd = 1, kLike = 2, kOpposite = 4;
+  static unsigned copies(std::uint8_t state) {
+    return kept_copies(state & kOdd, state & kLike, state & kOpposite);
+  }
+  FlatHashMap<W> table_;
+  std::vector<std::uint8_t> state_;  // per triple in order of first source
+  std::size_t kept_ = 0;
+};
 
 // A kept cluster triple's triangle with corners `corner` at the vertex records `record`, first
 // source winding like the sorted triple iff `even`, its sources' area-weighted normals summed

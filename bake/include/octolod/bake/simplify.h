@@ -33,7 +33,9 @@ namespace octolod::bake {
 enum class ClusterMethod {
   // Lindstrom-style: a grid of cubic cells inside the node, one quadric-optimal representative
   // per cell (inside its cell), locked boundary vertices are their own clusters, triangles whose
-  // three corners land in three distinct clusters survive. For a wanted triangle count the grid
+  // three corners land in three distinct clusters survive (once per cluster triple when their
+  // number is odd; twice, wound both ways, when it is even and both windings occur: a thin sheet
+  // such as a wall whose two faces share cells stays, two-sided). For a wanted triangle count the grid
   // is adaptive: a coarser grid whose cells with the highest quadric error per area (where the
   // surface bends inside the cell) are halved, as many as the count allows. The default.
   grid,
@@ -61,7 +63,8 @@ struct SimplifyResult {
   // Welded indexed mesh, same layout as the input. Vertex order: sorted by cluster (coarse cells,
   // then halved cells, in grid order, then locked vertices in input order), so the same input and options give the same
   // bytes on any thread. Normals unit length, colours in 0..1, no triangle with two corners at
-  // the same position, no triangle repeated.
+  // the same position, no triangle repeated with the same winding (a two-sided sheet has each
+  // of its triangles once per winding).
   NodeMesh mesh;
   // Upper bound, in model units, of the one-sided Hausdorff distance from the input surface to
   // the output surface: max over points x of the input of dist(x, output). 0 when the output is
