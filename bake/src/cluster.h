@@ -71,6 +71,15 @@ class GridCellKeys {
 // `mesh` must be valid (indices in range, finite positions); checked by simplify_node.
 PreparedNode prepare_node(const NodeMesh& mesh, const Bounds& cell);
 
+// The next resolution of a search for the finest grid whose triangle count (the last one,
+// `count` at resolution g) stays within `target`, given the finest feasible resolution `lo` and
+// the coarsest infeasible one `hi` found so far: triangles grow about like g^2 on a surface, so
+// a power-law step towards 0.95 x target, at least 15% coarser when over it, at most 4x either
+// way; the middle of (lo, hi) when that step leaves the interval. Shared by the in-memory grid's
+// search and the streamed leaf's.
+std::uint32_t next_search_resolution(std::uint32_t g, std::size_t count, std::size_t target, std::uint32_t lo,
+                                     std::uint32_t hi);
+
 // Grid method at resolution g (cells along the longest side of cell ∪ mesh bounds, g >= 1).
 ClusteredMesh cluster_grid(const PreparedNode& node, std::uint32_t g);
 // Grid method for a wanted triangle count: a coarse grid whose resolution is searched for about

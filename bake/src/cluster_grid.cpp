@@ -237,6 +237,18 @@ std::size_t count_grid_triangles(const PreparedNode& node, std::uint32_t g) {
   return count_kept_triangles(node, dense_ids(vertex_keys(node, make_domain(node, g)), false).first);
 }
 
+std::uint32_t next_search_resolution(std::uint32_t g, std::size_t count, std::size_t target, std::uint32_t lo,
+                                     std::uint32_t hi) {
+  // over the target: at least 15% coarser per step (counts with a large fixed part, locked
+  // boundaries or many small parts, fall slower than g^2)
+  double ratio = count > 0 ? std::sqrt(0.95 * static_cast<double>(target) / static_cast<double>(count)) : 4.0;
+  if (count > target) ratio = std::min(ratio, 0.85);
+  const double next = std::clamp(static_cast<double>(g) * ratio, static_cast<double>(g) / 4.0,
+                                 static_cast<double>(g) * 4.0);
+  const auto step = static_cast<std::uint32_t>(std::lround(next));
+  return step <= lo || step >= hi ? lo + (hi - lo) / 2 : step;  // the model stalled: bisect
+}
+
 namespace {
 
 // choose_grid_resolution's answer and the count it measured there.
@@ -281,14 +293,7 @@ GridChoice search_grid_resolution(const PreparedNode& node, std::size_t target) 
     if (count <= target && count > best_count) best = g, best_count = count;
     if (count <= target && (count >= node.mesh.triangle_count() || static_cast<double>(count) >= 0.85 * static_cast<double>(target)))
       break;  // close enough, or nothing left to merge
-    // over the target: at least 15% coarser per step (counts with a large fixed part, locked
-    // boundaries or many small parts, fall slower than g^2)
-    double ratio = count > 0 ? std::sqrt(0.95 * static_cast<double>(target) / static_cast<double>(count)) : 4.0;
-    if (count > target) ratio = std::min(ratio, 0.85);
-    const double next = std::clamp(static_cast<double>(g) * ratio, static_cast<double>(g) / 4.0,
-                                   static_cast<double>(g) * 4.0);
-    g = static_cast<std::uint32_t>(std::lround(next));
-    if (g <= lo || g >= hi) g = lo + (hi - lo) / 2;  // the model stalled: bisect
+    g = next_search_resolution(g, count, target, lo, hi);
   }
   // g = 1 unless the search found more triangles (within the target) than it keeps
   if (best_count > coarsest_bound) return {best, best_count};

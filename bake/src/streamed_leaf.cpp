@@ -204,8 +204,9 @@ class StreamedLeafBuilder {
     const double guess = survey_.area > 0.0 ? side * std::sqrt(static_cast<double>(limit) / (3.0 * survey_.area)) : 8.0;
     std::uint32_t lo = 0, hi = kMaxResolution + 1;  // lo: feasible (0: none yet), hi: infeasible
     auto g = static_cast<std::uint32_t>(std::clamp(guess, 1.0, static_cast<double>(kMaxResolution)));
-    // Triangles grow about like g^2: power-law steps through the last count, bisection when
-    // they stall; stop within 15% below the limit (as search_grid_resolution, at most 10 counts).
+    // next_search_resolution's steps; stop within 15% below the limit (as
+    // search_grid_resolution, at most 10 counts). A count abandoned past 2 x limit distinct
+    // triples steps as a count of 4 x limit would.
     for (int evaluation = 0; evaluation < 10 && hi - lo > 1; ++evaluation) {
       g = std::clamp(g, lo + 1, hi - 1);
       auto counted = count_triangles(g, limit);
@@ -217,13 +218,8 @@ class StreamedLeafBuilder {
       } else {
         hi = g;
       }
-      const double ratio = count && *count > 0
-                               ? std::sqrt(0.95 * static_cast<double>(limit) / static_cast<double>(*count))
-                               : 0.5;
-      const double next = std::clamp(static_cast<double>(g) * (count && *count > limit ? std::min(ratio, 0.85) : ratio),
-                                     static_cast<double>(g) / 4.0, static_cast<double>(g) * 4.0);
-      g = static_cast<std::uint32_t>(std::lround(next));
-      if (g <= lo || g >= hi) g = lo + (hi - lo) / 2;
+      g = next_search_resolution(g, static_cast<std::size_t>(count ? *count : 4 * limit),
+                                 static_cast<std::size_t>(limit), lo, hi);
     }
     if (lo == 0 && hi > 1) {  // the search stopped above g = 1: the coarsest grid decides
       auto coarsest = count_triangles(1, limit);
