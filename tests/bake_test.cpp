@@ -226,7 +226,7 @@ void BakeTest::expect_leaves_hold_exactly_the_input_triangles(std::uint64_t budg
     EXPECT_TRUE(n.source_triangles <= o.max_tris || n.depth == o.max_depth) << n.path;
     some_leaf_over_max = some_leaf_over_max || n.source_triangles > o.max_tris;
     some_leaf_over_cap = some_leaf_over_cap ||
-                         n.source_triangles > max_depth_leaf_triangles(budget, layout);
+                         n.source_triangles > max_depth_leaf_triangles(budget, layout, o.max_tris);
     ASSERT_GE(n.lods.size(), 1u);
     EXPECT_EQ(n.lods[0].error, 0.0);
     EXPECT_EQ(n.lods[0].file, (n.path.empty() ? "" : n.path + "/") + "lod0.olod");
@@ -261,12 +261,12 @@ void BakeTest::expect_leaves_hold_exactly_the_input_triangles(std::uint64_t budg
   expect_no_temp_files();
 }
 
-// The smallest budget whose max_depth_leaf_triangles reaches `triangles`.
-std::uint64_t budget_for_leaf(std::uint64_t triangles, VertexLayout layout) {
+// The smallest budget whose max_depth_leaf_triangles reaches `triangles` (> max_tris).
+std::uint64_t budget_for_leaf(std::uint64_t triangles, VertexLayout layout, std::uint32_t max_tris) {
   std::uint64_t low = kMinBakeBudget, high = std::uint64_t{1} << 40;
   while (low < high) {
     const std::uint64_t mid = low + (high - low) / 2;
-    if (max_depth_leaf_triangles(mid, layout) >= triangles) high = mid;
+    if (max_depth_leaf_triangles(mid, layout, max_tris) >= triangles) high = mid;
     else low = mid + 1;
   }
   return low;
@@ -290,7 +290,7 @@ TEST_F(BakeTest, LeafAtMaxDepthOverTheBudgetsCapIsStreamedIntoTheSameTree) {
   for (const NodeInfo& n : earlier->manifest.nodes)
     if (n.is_leaf() && (!largest || n.source_triangles > largest->source_triangles)) largest = &n;
   ASSERT_TRUE(largest && largest->depth == 2 && largest->source_triangles > o.max_tris + 1);
-  const std::uint64_t fits = budget_for_leaf(largest->source_triangles, earlier->manifest.layout);
+  const std::uint64_t fits = budget_for_leaf(largest->source_triangles, earlier->manifest.layout, o.max_tris);
   auto lod0 = [](const fs::path& tree, const NodeInfo& n) {
     auto mesh = read_node_file(tree / n.lods[0].file);
     EXPECT_TRUE(mesh.ok()) << mesh.status().message();

@@ -482,9 +482,8 @@ TEST_F(LodTreeTest, LeavesOverTheCapAreStreamedWithinItAndStayCrackFreeAndBounde
     const LoadedTree r = bake_and_load(in_memory);
     const Manifest& m = t.manifest;
     ASSERT_EQ(m.nodes.size(), r.manifest.nodes.size());
-    const std::uint64_t cap = std::max<std::uint64_t>(
-        max_depth_leaf_triangles(o.memory_budget_bytes, m.layout), o.max_tris + 1ull);
-    ASSERT_LT(cap, max_depth_leaf_triangles(in_memory.memory_budget_bytes, m.layout));
+    const std::uint64_t cap = max_depth_leaf_triangles(o.memory_budget_bytes, m.layout, o.max_tris);
+    ASSERT_LT(cap, max_depth_leaf_triangles(in_memory.memory_budget_bytes, m.layout, o.max_tris));
     const double diagonal = std::sqrt(
         std::pow(m.bounds.max[0] - m.bounds.min[0], 2.0) + std::pow(m.bounds.max[1] - m.bounds.min[1], 2.0) +
         std::pow(m.bounds.max[2] - m.bounds.min[2], 2.0));

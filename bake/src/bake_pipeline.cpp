@@ -234,8 +234,7 @@ LodTreeOptions lod_tree_options(const BakeOptions& options, VertexLayout layout,
   o.workers = workers;
   o.queue_bytes = budget.queue_bytes;
   o.keep_bytes = budget.keep_bytes;
-  o.streamed_max_lod1_triangles = std::max<std::uint64_t>(
-      max_depth_leaf_triangles(options.memory_budget_bytes, layout), options.max_tris + 1ull);
+  o.streamed_max_lod1_triangles = max_depth_leaf_triangles(options.memory_budget_bytes, layout, options.max_tris);
   o.streamed_chunk_triangles = kStreamedChunkLeaves * o.streamed_max_lod1_triangles;
   o.streamed_sort_bytes = options.memory_budget_bytes / kStreamedSortShare;
   o.work_dir = work;
@@ -250,7 +249,7 @@ MaxDepthLeafSpill max_depth_leaf_spill(const BakeOptions& options, VertexLayout 
                                        OctreeBuilder* const& builder,
                                        std::function<Status(std::size_t count)> records = {}) {
   MaxDepthLeafSpill s;
-  s.triangles = max_depth_leaf_triangles(options.memory_budget_bytes, layout);
+  s.triangles = max_depth_leaf_triangles(options.memory_budget_bytes, layout, options.max_tris);
   s.append = [&spill, records](const OctreeNode&, std::span<const std::byte> bytes,
                                std::size_t count) {
     return records ? records(count) : spill.append(bytes);
@@ -667,9 +666,10 @@ std::optional<ClusterMethod> parse_method(std::string_view name) {
   return std::nullopt;
 }
 
-std::uint64_t max_depth_leaf_triangles(std::uint64_t memory_budget_bytes, VertexLayout layout) {
-  return memory_budget_bytes / kMaxDepthLeafShare /
-         (kLeafCostInRecords * soup_record_bytes(layout));
+std::uint64_t max_depth_leaf_triangles(std::uint64_t memory_budget_bytes, VertexLayout layout,
+                                       std::uint32_t max_tris) {
+  return std::max<std::uint64_t>(memory_budget_bytes / kMaxDepthLeafShare / (kLeafCostInRecords * soup_record_bytes(layout)),
+                                 std::uint64_t{max_tris} + 1);
 }
 
 Result<BakeReport> bake(const BakeOptions& options) {

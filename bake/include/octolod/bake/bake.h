@@ -62,8 +62,8 @@ struct BakeOptions {
   // Memory: about (max_tris + 1) soup records per leaf in flight. At least 1.
   std::uint32_t max_tris = 2000;
   // Deepest level (root = 0), at most 21. A leaf at max_depth cannot split, so it keeps all
-  // its triangles; one holding more than max_depth_leaf_triangles(memory_budget_bytes, layout)
-  // (and max_tris + 1) is spilled to a temporary file and built streaming (memory bounded by
+  // its triangles; one holding more than max_depth_leaf_triangles(memory_budget_bytes, layout,
+  // max_tris) is spilled to a temporary file and built streaming (memory bounded by
   // that cap, not by the leaf): LOD 0 its original triangles, stored per chunk of that many
   // (a vertex shared by two chunks is stored twice), LOD 1 a vertex clustering of at most that
   // many triangles (and half the leaf) with the leaf's boundary kept and per-cell attributes
@@ -73,7 +73,7 @@ struct BakeOptions {
   std::uint32_t max_depth = 10;
   // Cap on the bake's buffers together (soup stage, octree sort, leaf buffers); the peak RSS is
   // this plus the program's fixed footprint (and the share of leaves at max_depth larger than
-  // max_tris + 1: max_depth_leaf_triangles, in memory or streamed). Larger budgets mean fewer sorted runs and merges
+  // max_tris + 1, up to max_depth_leaf_triangles, in memory or streamed). Larger budgets mean fewer sorted runs and merges
   // and, once the vertices fit in half of it, the in-core soup path. At least kMinBakeBudget.
   std::uint64_t memory_budget_bytes = std::uint64_t{64} << 20;
   // Where the temporary files go (inside a fresh ".octolod-tmp-*" directory); empty: next to
@@ -111,13 +111,15 @@ std::optional<ClusterMethod> parse_method(std::string_view name);
 inline constexpr std::uint64_t kMinBakeBudget = std::uint64_t{1} << 20;
 
 // The most triangles a leaf at max_depth may hold under a budget of memory_budget_bytes with
-// vertices of `layout` (a leaf of max_tris + 1 is always allowed): a quarter of the budget at
+// vertices of `layout`, never fewer than max_tris + 1 (a leaf that small is always built in
+// memory): a quarter of the budget at
 // about 16 soup records of memory per triangle (its records, indexed mesh, simplification
 // arrays and LOD chain, measured on leaves of up to 400K triangles). That quarter comes on top
 // of the rest of the bake's buffers, for each such leaf in work; a larger leaf is built
 // streaming in chunks of this many triangles. Depends only on its arguments: the cap decides
 // how a leaf is built, never the tree.
-std::uint64_t max_depth_leaf_triangles(std::uint64_t memory_budget_bytes, VertexLayout layout);
+std::uint64_t max_depth_leaf_triangles(std::uint64_t memory_budget_bytes, VertexLayout layout,
+                                       std::uint32_t max_tris);
 
 struct BakeReport {
   Manifest manifest;             // as written to OUT_DIR/manifest.json
