@@ -461,6 +461,35 @@ fs::path streamed_rock_ply(const fs::path& dir) {
   return ply;
 }
 
+// Largest circular distance between an output vertex's u and the u of the nearest corner of the
+// input triangle closest to it, over the output vertices between the polar caps (v within 0.08
+// of 0 or 1: there the longitudes meet). The rock's u is the longitude / 2 pi and jumps from 1
+// back to 0 at longitude 0, where the generator duplicates the vertices: an output vertex that
+// keeps one side of that seam stays within about a cell's span of u of the input next to it,
+// one whose cell averaged both sides is near 0.5 away from both.
+double worst_u_drift(const NodeMesh& input, const NodeMesh& output) {
+  const std::size_t stride = input.layout.floats(), u = input.layout.uv_offset();
+  const measure::TriangleBvh bvh(input.vertices, input.layout.floats(), input.indices);
+  double worst = 0.0;
+  for (std::size_t v = 0; v < output.vertex_count(); ++v) {
+    const float* vertex = &output.vertices[v * stride];
+    if (vertex[u + 1] < 0.08f || vertex[u + 1] > 0.92f) continue;
+    const glm::vec3 p(vertex[0], vertex[1], vertex[2]);
+    const auto hit = bvh.closest(p);
+    const float* nearest = nullptr;
+    float nearest_distance = 0.0f;
+    for (std::size_t k = 0; k < 3; ++k) {
+      const float* corner = &input.vertices[input.indices[3 * std::size_t{hit.triangle} + k] * stride];
+      const glm::vec3 offset = glm::vec3(corner[0], corner[1], corner[2]) - p;
+      const float d = offset.x * offset.x + offset.y * offset.y + offset.z * offset.z;
+      if (!nearest || d < nearest_distance) nearest = corner, nearest_distance = d;
+    }
+    const double d = std::fabs(double(vertex[u]) - nearest[u]);
+    worst = std::max(worst, std::min(d, 1.0 - d));
+  }
+  return worst;
+}
+
 // At --max-depth 0 and 1 under a small budget every leaf is over the in-memory cap and is built
 // streaming: LOD 0 holds exactly the leaf's triangles (those of the same leaf baked in memory
 // under a large budget, in the same order), LOD 1 at most the cap and half the leaf, every
@@ -511,6 +540,8 @@ TEST_F(LodTreeTest, LeavesOverTheCapAreStreamedWithinItAndStayCrackFreeAndBounde
         EXPECT_EQ(violations, 0u) << n.path << " LOD " << k << " error " << n.lods[k].error;
       }
       EXPECT_LT(n.lods[1].error, 0.1 * diagonal) << n.path;
+      // LOD 1's wedges keep the sides of the uv seam apart (streamed_leaf.h)
+      EXPECT_LT(worst_u_drift(t.lods[i][0], t.lods[i][1]), 0.2) << n.path;
     }
     EXPECT_EQ(streamed, depth == 0 ? 1u : 8u);
     if (depth == 0) {  // one node: every LOD is a cut

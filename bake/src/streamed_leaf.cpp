@@ -90,6 +90,81 @@ Corners load_corners(const std::byte* record, VertexLayout layout) {
   return c;
 }
 
+// The wedges of the streamed clustering. The in-memory grid's wedges are the corners of a
+// cluster connected through edges inside it (wedges.h), which needs every vertex of the node at
+// once. Streaming, a cluster's corners are grouped by their attributes instead: a corner joins
+// the cluster's first wedge whose first corner is on its side of every attribute seam (normals
+// within 60 degrees, colour and uv channels within 0.25 of each other), else it starts a new one
+// (at most kMaxWedges per cluster; past that, the nearest). The two sides of a seam (the rock's
+// u jumping from 1 to 0, a box's faces meeting at 90 degrees) are then never averaged; a smooth
+// field that changes by more than the tolerance within one cell is split into several wedges,
+// which costs output vertices, not accuracy. Each wedge's attributes are the area-weighted mean
+// of its corners'. Memory: per wedge, a few of the layout's floats (about the output vertices).
+class AttributeWedges {
+ public:
+  static constexpr std::uint32_t kNone = 0xFFFFFFFFu;
+  static constexpr std::uint32_t kMaxWedges = 8;
+
+  explicit AttributeWedges(VertexLayout layout) : layout_(layout), m_(layout.floats() - 3) {}
+
+  // The wedge of a corner of cluster `cluster` whose attributes (the floats after its
+  // position) are `attributes`.
+  std::uint32_t wedge_of(std::uint32_t cluster, const float* attributes) {
+    if (cluster >= first_.size()) first_.resize(std::size_t{cluster} + 1, kNone);
+    std::uint32_t nearest = kNone, count = 0;
+    double nearest_distance = std::numeric_limits<double>::infinity();
+    for (std::uint32_t w = first_[cluster]; w != kNone; w = next_[w], ++count) {
+      const double d = distance(&first_attributes_[w * m_], attributes);
+      if (d <= 1.0) return w;
+      if (d < nearest_distance) nearest = w, nearest_distance = d;
+    }
+    if (count >= kMaxWedges) return nearest;
+    const auto w = static_cast<std::uint32_t>(next_.size());
+    next_.push_back(first_[cluster]);
+    first_[cluster] = w;
+    cluster_.push_back(cluster);
+    first_attributes_.insert(first_attributes_.end(), attributes, attributes + m_);
+    sum_.resize(sum_.size() + m_, 0.0);
+    area_.push_back(0.0);
+    return w;
+  }
+  void add(std::uint32_t wedge, double area, const float* attributes) {
+    for (std::size_t i = 0; i < m_; ++i) sum_[wedge * m_ + i] += area * attributes[i];
+    area_[wedge] += area;
+  }
+  // The wedge's attributes: the area-weighted mean, its first corner's when it has no area.
+  void attributes(std::uint32_t wedge, double* out) const {
+    for (std::size_t i = 0; i < m_; ++i)
+      out[i] = area_[wedge] > 0.0 ? sum_[wedge * m_ + i] / area_[wedge] : first_attributes_[wedge * m_ + i];
+  }
+  std::size_t size() const { return area_.size(); }
+  std::uint32_t cluster(std::uint32_t wedge) const { return cluster_[wedge]; }
+
+ private:
+  // max over the attribute groups of how far b is from a, in units of the group's tolerance:
+  // at most 1 on the same side of every seam
+  double distance(const float* a, const float* b) const {
+    double worst = 0.0;
+    std::size_t i = 0;
+    if (layout_.normal) {
+      const double cosine = double(a[0]) * b[0] + double(a[1]) * b[1] + double(a[2]) * b[2];
+      worst = (1.0 - cosine) / (1.0 - 0.5);  // cos 60 degrees
+      i = 3;
+    }
+    for (; i < m_; ++i) worst = std::max(worst, std::fabs(double(a[i]) - b[i]) / 0.25);
+    return worst;
+  }
+
+  VertexLayout layout_;
+  std::size_t m_;                         // attribute floats per vertex
+  std::vector<std::uint32_t> first_;      // per cluster: its latest wedge
+  std::vector<std::uint32_t> next_;       // per wedge: the cluster's previous one
+  std::vector<std::uint32_t> cluster_;    // per wedge
+  std::vector<float> first_attributes_;   // per wedge: its first corner's attributes
+  std::vector<double> sum_;               // per wedge: area-weighted attribute sums
+  std::vector<double> area_;
+};
+
 class StreamedLeafBuilder {
  public:
   StreamedLeafBuilder(const fs::path& records, const StreamedLeafOptions& options)
@@ -234,22 +309,23 @@ class StreamedLeafBuilder {
   Result<NodeMesh> cluster(std::uint32_t g, std::uint64_t limit) {
     const GridDomain grid = make_domain(g);
     const GridCellKeys cells(grid, origin_);
-    const int attributes = static_cast<int>(layout_.floats()) - 3;
     constexpr std::size_t q3 = quadric_doubles(3);
     std::unordered_map<std::uint64_t, std::uint32_t> cluster_of;
     std::vector<std::uint64_t> keys;       // per cluster
-    std::vector<double> quadric, sum, attribute_sum, area, best;
+    std::vector<double> quadric, sum, best;
+    AttributeWedges wedges(layout_);
     std::vector<std::uint32_t> corners;
     // locked vertex records (bit-identical in the output), by their bits
     std::unordered_map<std::string, std::uint32_t> locked_record_of;
     std::vector<float> locked_records;
     struct Candidate {
       std::uint32_t count = 0;
-      std::uint32_t like_sorted = 0;           // sources winding like the sorted triple
-      std::array<std::uint32_t, 3> vertex{};  // output vertex refs of the first source
-      std::array<std::uint32_t, 3> cluster{};  // the first source's clusters, its winding
-      std::array<double, 3> normal{};          // area-weighted, in the sorted triple's winding
-      std::array<double, 3> like_normal{};     // the same, of the sources winding like it
+      std::uint32_t like_sorted = 0;          // sources winding like the sorted triple
+      bool first_is_like = false;             // the first source is one of them
+      std::array<std::uint32_t, 3> like{};    // output vertex refs of the first of them
+      std::array<std::uint32_t, 3> opposite{};  // and of the first source winding the other way
+      std::array<double, 3> normal{};         // area-weighted, in the sorted triple's winding
+      std::array<double, 3> like_normal{};    // the same, of the sources winding like it
     };
     constexpr std::uint32_t kLockedRef = 1u << 31;
     FlatHashMap<3> candidate_of(2 * limit);
@@ -263,15 +339,14 @@ class StreamedLeafBuilder {
         keys.push_back(key);
         quadric.resize(quadric.size() + q3, 0.0);
         sum.resize(sum.size() + 3, 0.0);
-        attribute_sum.resize(attribute_sum.size() + static_cast<std::size_t>(attributes), 0.0);
-        area.push_back(0.0);
         corners.push_back(0);
         best.insert(best.end(), {0.0, 0.0, 0.0, std::numeric_limits<double>::infinity()});
       }
       return it->second;
     };
-    auto vertex_ref = [&](std::uint32_t cluster, const float* vertex) {
-      if (!(keys[cluster] & kLockedKey)) return cluster;
+    // an unlocked corner's ref is its wedge
+    auto vertex_ref = [&](std::uint32_t cluster, std::uint32_t wedge, const float* vertex) {
+      if (!(keys[cluster] & kLockedKey)) return wedge;
       std::string bits(reinterpret_cast<const char*>(vertex), layout_.bytes());
       auto [it, inserted] = locked_record_of.try_emplace(std::move(bits), static_cast<std::uint32_t>(locked_records.size() / stride));
       if (inserted) locked_records.insert(locked_records.end(), vertex, vertex + stride);
@@ -291,16 +366,16 @@ class StreamedLeafBuilder {
         double plane[q3] = {};
         const double p0[3] = {double(p[0][0]) - origin_[0], double(p[0][1]) - origin_[1], double(p[0][2]) - origin_[2]};
         if (a > 0.0) plane_quadric(normal.data(), p0, a, plane);
+        std::array<std::uint32_t, 3> wedge{AttributeWedges::kNone, AttributeWedges::kNone, AttributeWedges::kNone};
         for (std::size_t k = 0; k < 3; ++k) {
           const std::uint32_t cl = id[k];
           if (keys[cl] & kLockedKey) continue;
+          wedge[k] = wedges.wedge_of(cl, p[k] + 3);
           ++corners[cl];
           for (std::size_t i = 0; i < 3; ++i) sum[cl * 3 + i] += double(p[k][i]) - origin_[i];
           if (!(a > 0.0)) continue;
           add_quadric(3, &quadric[cl * q3], plane);
-          area[cl] += a;
-          for (int i = 0; i < attributes; ++i)
-            attribute_sum[cl * static_cast<std::size_t>(attributes) + static_cast<std::size_t>(i)] += a * p[k][3 + i];
+          wedges.add(wedge[k], a, p[k] + 3);
         }
         if (id[0] == id[1] || id[1] == id[2] || id[0] == id[2]) continue;
         std::array<std::uint32_t, 3> sorted = id;
@@ -312,12 +387,15 @@ class StreamedLeafBuilder {
         bool inserted = false;
         const std::uint32_t index = candidate_of.find_or_insert(sorted, static_cast<std::uint32_t>(candidates.size()), inserted);
         if (inserted) {
-          Candidate candidate;
-          candidate.cluster = id;
-          for (std::size_t k = 0; k < 3; ++k) candidate.vertex[k] = vertex_ref(id[k], p[k]);
-          candidates.push_back(candidate);
+          candidates.emplace_back();
+          candidates.back().first_is_like = even;
         }
         Candidate& candidate = candidates[index];
+        const bool first_of_its_winding = even ? candidate.like_sorted == 0 : candidate.count == candidate.like_sorted;
+        if (first_of_its_winding) {
+          std::array<std::uint32_t, 3>& refs = even ? candidate.like : candidate.opposite;
+          for (std::size_t k = 0; k < 3; ++k) refs[k] = vertex_ref(id[k], wedge[k], p[k]);
+        }
         ++candidate.count;
         candidate.like_sorted += even;
         for (std::size_t i = 0; i < 3; ++i) candidate.normal[i] += even ? normal[i] : -normal[i];
@@ -345,26 +423,29 @@ class StreamedLeafBuilder {
       return {};
     }));
 
-    // representatives: position from the quadric, attributes the area-weighted mean
-    std::vector<float> representative(keys.size() * stride);
+    // representatives: per cluster a position from its quadric, per wedge its attributes
+    std::vector<double> position(keys.size() * 3);
     for (std::size_t cl = 0; cl < keys.size(); ++cl) {
       if (keys[cl] & kLockedKey) continue;
-      double mean[3], x[3];
+      double mean[3];
       for (std::size_t i = 0; i < 3; ++i) mean[i] = sum[cl * 3 + i] / corners[cl];
-      place_representative(&quadric[cl * q3], mean, grid_cell_box(grid, keys[cl]), &best[cl * 4], x);
+      place_representative(&quadric[cl * q3], mean, grid_cell_box(grid, keys[cl]), &best[cl * 4], &position[cl * 3]);
+    }
+    std::vector<float> representative(wedges.size() * stride);
+    for (std::uint32_t w = 0; w < wedges.size(); ++w) {
       double v[kMaxQuadricDim] = {};
-      for (int i = 0; i < attributes; ++i)
-        v[3 + i] = area[cl] > 0.0 ? attribute_sum[cl * static_cast<std::size_t>(attributes) + static_cast<std::size_t>(i)] / area[cl] : 0.0;
+      wedges.attributes(w, v + 3);
       const double up[3] = {0.0, 0.0, 1.0};
       finish_attributes(layout_, up, v + 3);
-      float* out = &representative[cl * stride];
-      for (std::size_t i = 0; i < 3; ++i) out[i] = static_cast<float>(x[i] + origin_[i]);
+      float* out = &representative[w * stride];
+      for (std::size_t i = 0; i < 3; ++i) out[i] = static_cast<float>(position[wedges.cluster(w) * 3 + i] + origin_[i]);
       for (std::size_t i = 3; i < stride; ++i) out[i] = static_cast<float>(v[i]);
     }
 
     // output: kept_copies per candidate, oriented like their sources (a two-sided pair: the
-    // copy facing like the sources that wind like the sorted triple, and its reverse; both with
-    // the clusters' one attribute vector), vertices in order of first use
+    // copy facing like the sources that wind like the sorted triple, with the first such
+    // source's wedges, and the first opposite source's wound against it), vertices in order of
+    // first use
     NodeMesh lod;
     lod.layout = layout_;
     std::unordered_map<std::uint32_t, std::uint32_t> output_of_ref;
@@ -385,14 +466,17 @@ class StreamedLeafBuilder {
       const unsigned copies = kept_copies(candidate.count % 2 == 1, candidate.like_sorted > 0,
                                           candidate.like_sorted < candidate.count);
       if (copies == 0) continue;
-      std::array<std::uint32_t, 3> ref = candidate.vertex;
+      const bool like = copies == 2 || candidate.first_is_like;
+      std::array<std::uint32_t, 3> ref = like ? candidate.like : candidate.opposite;
+      const std::array<std::uint32_t, 3> unturned = ref;
       const std::array<const float*, 3> corner_records{record_of(ref[0]), record_of(ref[1]), record_of(ref[2])};
-      const std::array<std::uint32_t, 3>& id = candidate.cluster;
-      if (!orient_kept_triangle(corner_records, winds_like_sorted(id[0], id[1], id[2]),
-                                copies == 1 ? candidate.normal : candidate.like_normal, ref))
+      if (!orient_kept_triangle(corner_records, like, copies == 1 ? candidate.normal : candidate.like_normal, ref))
         continue;
       emit(ref);
-      if (copies == 2) emit({ref[0], ref[2], ref[1]});
+      if (copies == 1) continue;
+      std::array<std::uint32_t, 3> back = candidate.opposite;
+      if (ref != unturned) std::swap(back[1], back[2]);
+      emit(back);
     }
     return lod;
   }

@@ -14,11 +14,15 @@
 //          clusters of their own, vertex records kept bit-identical), so cuts mixing this
 //          leaf's LODs with its neighbours' never crack. Every other corner falls in its grid
 //          cell; a cell's position comes from its area-weighted plane quadric (quadric.h) as in
-//          the in-memory grid (place_representative), its attributes are the area-weighted mean
-//          of its corners' (normals renormalized, colours clamped: seams inside a cell are
-//          averaged, unlike the in-memory grid's wedges). Triangles whose corners fall in three
-//          distinct clusters survive as build_clustered_mesh's rule keeps them (kept_copies
-//          per cluster triple: once when odd, a two-sided pair for a folded sheet). The resolution is searched by counting passes
+//          the in-memory grid (place_representative). Its corners are split into wedges by
+//          their attributes (streamed_leaf.cpp, AttributeWedges: a corner joins a wedge whose
+//          first corner is within 60 degrees of normal and 0.25 of every colour and uv channel,
+//          so the two sides of a seam are never averaged; the in-memory grid's wedges follow
+//          the mesh's edges, which streaming cannot hold), each wedge the area-weighted mean of
+//          its corners' attributes (normals renormalized, colours clamped). Triangles whose
+//          corners fall in three distinct clusters survive as build_clustered_mesh's rule keeps
+//          them (kept_copies per cluster triple: once when odd, a two-sided pair for a folded
+//          sheet), with the wedges of a source triangle. The resolution is searched by counting passes
 //          (a resolution whose distinct cluster triples pass twice the limit counts as too
 //          fine, so memory stays bounded by the limit) for at most min(max_lod1_triangles,
 //          half the input) triangles. Its error bound is the max over chunks of

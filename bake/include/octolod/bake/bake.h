@@ -66,8 +66,9 @@ struct BakeOptions {
   // max_tris) is spilled to a temporary file and built streaming (memory bounded by
   // that cap, not by the leaf): LOD 0 its original triangles, stored per chunk of that many
   // (a vertex shared by two chunks is stored twice), LOD 1 a vertex clustering of at most that
-  // many triangles (and half the leaf) with the leaf's boundary kept and per-cell attributes
-  // (attribute seams inside a cell are averaged), the rest of the chain from LOD 1: a coarser
+  // many triangles (and half the leaf) with the leaf's boundary kept and attributes per
+  // wedge (a cell's corners grouped by their attributes, so seams are not averaged across),
+  // the rest of the chain from LOD 1: a coarser
   // first step than an in-memory leaf's halving; raise max_depth for dense models when that
   // matters.
   std::uint32_t max_depth = 10;
