@@ -491,13 +491,21 @@ TEST(Paging, ThreadPoolLoadsConvergeToTheReferenceCut) {
   StreamingTree& streaming = *opened.value();
   const Camera camera = look(glm::vec3(-30, 70, 110), kCenter);
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(10);
+  const std::uint32_t root = tree.node_at("");
+  const auto root_coarsest = static_cast<std::uint32_t>(tree.manifest.nodes[root].lods.size() - 1);
   const FrameResult* frame = &streaming.update(camera);
   while (std::chrono::steady_clock::now() < deadline &&
          (frame->stats.loads_in_flight > 0 || frame->stats.loads_issued > 0 || frame->stats.loads_completed > 0)) {
     std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    // holes only until the root's coarsest LOD has arrived (streaming_tree.h), which on a slow
+    // or busy machine (sanitizers) can take more than the first millisecond
+    const bool root_arrived = streaming.is_resident(root, root_coarsest);
     frame = &streaming.update(camera);
-    EXPECT_EQ(frame->stats.holes, 0u);
+    if (root_arrived) {
+      EXPECT_EQ(frame->stats.holes, 0u);
+    }
   }
+  EXPECT_TRUE(streaming.is_resident(root, root_coarsest));
   std::map<std::uint32_t, std::uint32_t> expected;
   testing::reference_cut(tree.manifest, camera, 2.0, 0, expected);
   EXPECT_EQ(draws_of(*frame), expected);
