@@ -95,6 +95,23 @@ TEST(Manifest, RejectsMissingKeysWrongTypesAndGarbage) {
   EXPECT_EQ(r.status().code(), ErrorCode::bad_input);
 }
 
+// Nodes are converted while the text is parsed (manifest.cpp): a bad one still fails the whole
+// manifest, named by its index.
+TEST(Manifest, RejectsABadNodeByIndexAndNonObjectNodes) {
+  const std::string text = manifest_to_json(small_manifest());
+  std::string missing = text;
+  missing.replace(missing.find("\"source_triangles\": 0"), 22, "\"source_triangle\": 0");
+  Result<Manifest> r = manifest_from_json(missing, "d");
+  ASSERT_FALSE(r.ok());
+  EXPECT_EQ(r.status().code(), ErrorCode::bad_input);
+  EXPECT_NE(r.status().message().find("node 1"), std::string::npos) << r.status().message();
+  std::string number = text;
+  number.replace(number.find("\"nodes\": ["), 11, "\"nodes\": [7, ");
+  r = manifest_from_json(number, "e");
+  ASSERT_FALSE(r.ok());
+  EXPECT_EQ(r.status().code(), ErrorCode::bad_input);
+}
+
 TEST(Manifest, NewerVersionIsUnsupported) {
   std::string text = manifest_to_json(small_manifest());
   text.replace(text.find("\"version\": 1"), 12, "\"version\": 7");
