@@ -207,7 +207,7 @@ template <class Parse>
 Result<Manifest> manifest_from_parser(const Parse& parse, std::string_view name) {
   // The nodes are converted as the parser finishes each one and dropped from the document: a
   // whole document of a large tree (212K nodes for 100M triangles, a 220 MB file) took about 6x
-  // its text in memory, the converted nodes take about 2x.
+  // its text in memory, the converted nodes take about half of it.
   Manifest m;
   std::string node_error;  // the first node that failed to convert
   std::string top_key;     // the top-level key being parsed
