@@ -319,13 +319,9 @@ class StreamedLeafBuilder {
     std::unordered_map<std::string, std::uint32_t> locked_record_of;
     std::vector<float> locked_records;
     struct Candidate {
-      std::uint32_t count = 0;
-      std::uint32_t like_sorted = 0;          // sources winding like the sorted triple
-      bool first_is_like = false;             // the first source is one of them
-      std::array<std::uint32_t, 3> like{};    // output vertex refs of the first of them
-      std::array<std::uint32_t, 3> opposite{};  // and of the first source winding the other way
-      std::array<double, 3> normal{};         // area-weighted, in the sorted triple's winding
-      std::array<double, 3> like_normal{};    // the same, of the sources winding like it
+      TripleSources sources;
+      std::array<std::uint32_t, 3> like{};      // output vertex refs of the first source winding
+      std::array<std::uint32_t, 3> opposite{};  // like the sorted triple, and of the first the other way
     };
     constexpr std::uint32_t kLockedRef = 1u << 31;
     FlatHashMap<3> candidate_of(2 * limit);
@@ -386,21 +382,12 @@ class StreamedLeafBuilder {
                "more cluster triples than the count pass at this resolution found");
         bool inserted = false;
         const std::uint32_t index = candidate_of.find_or_insert(sorted, static_cast<std::uint32_t>(candidates.size()), inserted);
-        if (inserted) {
-          candidates.emplace_back();
-          candidates.back().first_is_like = even;
-        }
+        if (inserted) candidates.emplace_back();
         Candidate& candidate = candidates[index];
-        const bool first_of_its_winding = even ? candidate.like_sorted == 0 : candidate.count == candidate.like_sorted;
-        if (first_of_its_winding) {
+        if (candidate.sources.add(even, normal)) {
           std::array<std::uint32_t, 3>& refs = even ? candidate.like : candidate.opposite;
           for (std::size_t k = 0; k < 3; ++k) refs[k] = vertex_ref(id[k], wedge[k], p[k]);
         }
-        ++candidate.count;
-        candidate.like_sorted += even;
-        for (std::size_t i = 0; i < 3; ++i) candidate.normal[i] += even ? normal[i] : -normal[i];
-        if (even)
-          for (std::size_t i = 0; i < 3; ++i) candidate.like_normal[i] += normal[i];
       }
       return {};
     }));
@@ -452,8 +439,11 @@ class StreamedLeafBuilder {
     auto record_of = [&](std::uint32_t ref) {
       return ref & kLockedRef ? &locked_records[(ref & ~kLockedRef) * stride] : &representative[ref * stride];
     };
-    auto emit = [&](const std::array<std::uint32_t, 3>& ref) {
-      for (std::uint32_t r : ref) {
+    std::vector<std::uint32_t> kept;  // one candidate's kept corners (refs)
+    for (const Candidate& candidate : candidates) {
+      kept.clear();
+      append_kept_triangles(candidate.sources, candidate.like, candidate.opposite, record_of, kept);
+      for (std::uint32_t r : kept) {
         auto [it, inserted] = output_of_ref.try_emplace(r, static_cast<std::uint32_t>(lod.vertex_count()));
         if (inserted) {
           const float* record = record_of(r);
@@ -461,22 +451,6 @@ class StreamedLeafBuilder {
         }
         lod.indices.push_back(it->second);
       }
-    };
-    for (const Candidate& candidate : candidates) {
-      const unsigned copies = kept_copies(candidate.count % 2 == 1, candidate.like_sorted > 0,
-                                          candidate.like_sorted < candidate.count);
-      if (copies == 0) continue;
-      const bool like = copies == 2 || candidate.first_is_like;
-      std::array<std::uint32_t, 3> ref = like ? candidate.like : candidate.opposite;
-      const std::array<std::uint32_t, 3> unturned = ref;
-      const std::array<const float*, 3> corner_records{record_of(ref[0]), record_of(ref[1]), record_of(ref[2])};
-      if (!orient_kept_triangle(corner_records, like, copies == 1 ? candidate.normal : candidate.like_normal, ref))
-        continue;
-      emit(ref);
-      if (copies == 1) continue;
-      std::array<std::uint32_t, 3> back = candidate.opposite;
-      if (ref != unturned) std::swap(back[1], back[2]);
-      emit(back);
     }
     return lod;
   }

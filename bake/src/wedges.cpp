@@ -24,12 +24,9 @@ std::uint32_t find_root(std::vector<std::uint32_t>& parent, std::uint32_t v) {
 
 // One candidate output triangle: the sources that map onto one cluster triple.
 struct Candidate {
-  std::uint32_t count = 0;
-  std::uint32_t like_sorted = 0;               // sources winding like the sorted triple
-  std::uint32_t first_like = kNoTriangle;      // the first of them
-  std::uint32_t first_opposite = kNoTriangle;  // the first source winding the other way
-  std::array<double, 3> normal{};       // area-weighted source normals, in the sorted triple's winding
-  std::array<double, 3> like_normal{};  // the same, of the sources winding like it
+  TripleSources sources;
+  std::uint32_t first_like = kNoTriangle;      // the first source winding like the sorted triple
+  std::uint32_t first_opposite = kNoTriangle;  // the first winding the other way
 };
 
 std::array<double, 3> cross(const std::array<double, 3>& a, const std::array<double, 3>& b) {
@@ -417,14 +414,8 @@ ClusteredMesh build_clustered_mesh(const NodeMesh& mesh, const Clustering& clust
     if (inserted) candidates.emplace_back();
     candidate_of_triangle[t] = index;
     Candidate& candidate = candidates[index];
-    ++candidate.count;
-    for (std::size_t i = 0; i < 3; ++i) candidate.normal[i] += even ? face_normal[t][i] : -face_normal[t][i];
-    if (!even) {
-      if (candidate.first_opposite == kNoTriangle) candidate.first_opposite = static_cast<std::uint32_t>(t);
-      continue;
-    }
-    if (candidate.like_sorted++ == 0) candidate.first_like = static_cast<std::uint32_t>(t);
-    for (std::size_t i = 0; i < 3; ++i) candidate.like_normal[i] += face_normal[t][i];
+    if (candidate.sources.add(even, face_normal[t]))
+      (even ? candidate.first_like : candidate.first_opposite) = static_cast<std::uint32_t>(t);
   }
 
   // output: kept_copies per candidate, oriented like their sources, vertices compacted in wedge order
@@ -434,29 +425,17 @@ ClusteredMesh build_clustered_mesh(const NodeMesh& mesh, const Clustering& clust
   std::vector<std::uint32_t> kept;  // wedge corners of kept triangles
   std::vector<std::uint32_t> output_of_candidate(candidates.size(), kNoTriangle);
   auto source_wedges = [&](std::uint32_t t) {
+    if (t == kNoTriangle) return std::array<std::uint32_t, 3>{};
     const std::uint32_t* corner = &mesh.indices[3 * static_cast<std::size_t>(t)];
     return std::array<std::uint32_t, 3>{wedge[corner[0]], wedge[corner[1]], wedge[corner[2]]};
   };
+  auto record_of = [&](std::uint32_t w) -> const float* { return &wedge_record[w * stride]; };
   for (std::size_t ci = 0; ci < candidates.size(); ++ci) {
     const Candidate& candidate = candidates[ci];
-    const unsigned copies = kept_copies(candidate.count % 2 == 1, candidate.like_sorted > 0,
-                                        candidate.like_sorted < candidate.count);
-    if (copies == 0) continue;
-    // the one copy from the first source; of a pair, the copy facing like the like-sorted sources
-    const std::uint32_t first = copies == 2 ? candidate.first_like : std::min(candidate.first_like, candidate.first_opposite);
-    std::array<std::uint32_t, 3> w = source_wedges(first);
-    const std::array<std::uint32_t, 3> unturned = w;
-    const std::array<const float*, 3> record{&wedge_record[w[0] * stride], &wedge_record[w[1] * stride],
-                                             &wedge_record[w[2] * stride]};
-    if (!orient_kept_triangle(record, first == candidate.first_like, copies == 2 ? candidate.like_normal : candidate.normal, w))
-      continue;
-    output_of_candidate[ci] = static_cast<std::uint32_t>(kept.size() / 3);
-    kept.insert(kept.end(), w.begin(), w.end());
-    if (copies == 1) continue;
-    // the other face: the first opposite source's wedges, wound against the first copy
-    std::array<std::uint32_t, 3> back = source_wedges(candidate.first_opposite);
-    if (w != unturned) std::swap(back[1], back[2]);
-    kept.insert(kept.end(), back.begin(), back.end());
+    const std::size_t before = kept.size();
+    append_kept_triangles(candidate.sources, source_wedges(candidate.first_like),
+                          source_wedges(candidate.first_opposite), record_of, kept);
+    if (kept.size() > before) output_of_candidate[ci] = static_cast<std::uint32_t>(before / 3);
   }
   std::vector<std::uint32_t> output_id(wedge_count, UINT32_MAX);
   for (std::uint32_t w : kept) output_id[w] = 0;

@@ -147,6 +147,57 @@ class KeptTriangleCounter {
 bool orient_kept_triangle(const std::array<const float*, 3>& record, bool even,
                           const std::array<double, 3>& source_normal, std::array<std::uint32_t, 3>& corner);
 
+// The sources of one cluster triple as the output rule counts them (build_clustered_mesh and the
+// streamed leaf): how many, how many wind like the sorted triple, which winding came first, and
+// their area-weighted normals in the sorted triple's winding (all of them, and those winding
+// like it).
+struct TripleSources {
+  std::uint32_t count = 0;
+  std::uint32_t like_sorted = 0;
+  bool first_is_like = false;
+  std::array<double, 3> normal{};
+  std::array<double, 3> like_normal{};
+
+  // One more source, winding like the sorted triple iff `like`, its normal `source_normal`
+  // (triangle_normal, in its own winding). True when it is the first source of its winding: the
+  // one whose corners append_kept_triangles takes for that winding.
+  bool add(bool like, const std::array<double, 3>& source_normal) {
+    const bool first = like ? like_sorted == 0 : count == like_sorted;
+    if (count == 0) first_is_like = like;
+    ++count;
+    like_sorted += like;
+    for (std::size_t i = 0; i < 3; ++i) normal[i] += like ? source_normal[i] : -source_normal[i];
+    if (like)
+      for (std::size_t i = 0; i < 3; ++i) like_normal[i] += source_normal[i];
+    return first;
+  }
+  unsigned copies() const { return kept_copies(count % 2 == 1, like_sorted > 0, like_sorted < count); }
+};
+
+// Appends to `out` the corners of the triangles the output rule keeps for one triple (copies()
+// of them). `like` and `opposite` are the corners, in their source's order, of the first source
+// of each winding (the one of a winding without sources is not read); `record(corner)` is a
+// corner's vertex record (const float*). The one copy takes the first source's corners, a
+// pair's front copy the `like` ones and its back copy the `opposite` ones wound against the
+// front; the front is oriented by orient_kept_triangle (nothing is appended when it drops it).
+template <class Record>
+void append_kept_triangles(const TripleSources& sources, const std::array<std::uint32_t, 3>& like,
+                           std::array<std::uint32_t, 3> opposite, const Record& record,
+                           std::vector<std::uint32_t>& out) {
+  const unsigned copies = sources.copies();
+  if (copies == 0) return;
+  const bool front_like = copies == 2 || sources.first_is_like;
+  std::array<std::uint32_t, 3> front = front_like ? like : opposite;
+  const std::array<std::uint32_t, 3> unturned = front;
+  if (!orient_kept_triangle({record(front[0]), record(front[1]), record(front[2])}, front_like,
+                            copies == 1 ? sources.normal : sources.like_normal, front))
+    return;
+  out.insert(out.end(), front.begin(), front.end());
+  if (copies == 1) return;
+  if (front != unturned) std::swap(opposite[1], opposite[2]);
+  out.insert(out.end(), opposite.begin(), opposite.end());
+}
+
 // The position quadrics of a clustering: every triangle with a positive area adds its plane
 // quadric (quadric.h, n = 3; the plane through corner 0 relative to `origin`, model units)
 // weighted by its area to quadrics[cluster[v]] (quadric_doubles(3) doubles per cluster) for each
