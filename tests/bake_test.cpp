@@ -123,6 +123,24 @@ Manifest without_run_details(Manifest m) {
   return m;
 }
 
+// OUT_DIR/manifest.json of a bake, checked against what the bake's report says about it: the
+// same manifest without its nodes, their LOD count, the root's coarsest LOD.
+Manifest written_manifest(const fs::path& root, const BakeReport& report) {
+  auto m = read_tree_manifest(root);
+  EXPECT_TRUE(m.ok()) << m.status().message();
+  if (!m.ok()) return {};
+  Manifest header = m.value();
+  header.nodes.clear();
+  EXPECT_EQ(manifest_to_json(header), manifest_to_json(report.header));
+  std::uint64_t lods = 0;
+  for (const NodeInfo& n : m->nodes) lods += n.lods.size();
+  EXPECT_EQ(report.lods, lods);
+  EXPECT_EQ(report.nodes, m->nodes.size());
+  const std::vector<LodInfo>& root_lods = m->nodes.front().lods;
+  EXPECT_EQ(report.root_coarsest_triangles, root_lods.empty() ? 0u : root_lods.back().triangles);
+  return std::move(m).value();
+}
+
 using Triangle = std::vector<float>;  // 3 corners x layout.floats()
 
 // The input's triangles as the soup stage reads them from the PLY (order: PLY order).
@@ -286,11 +304,12 @@ TEST_F(BakeTest, LeafAtMaxDepthOverTheBudgetsCapIsStreamedIntoTheSameTree) {
   auto earlier = bake(o);
   ASSERT_TRUE(earlier.ok()) << earlier.status().message();
   const std::map<std::string, std::string> before = tree_files(path("out"));
+  const Manifest earlier_manifest = written_manifest(path("out"), earlier.value());
   const NodeInfo* largest = nullptr;
-  for (const NodeInfo& n : earlier->manifest.nodes)
+  for (const NodeInfo& n : earlier_manifest.nodes)
     if (n.is_leaf() && (!largest || n.source_triangles > largest->source_triangles)) largest = &n;
   ASSERT_TRUE(largest && largest->depth == 2 && largest->source_triangles > o.max_tris + 1);
-  const std::uint64_t fits = budget_for_leaf(largest->source_triangles, earlier->manifest.layout, o.max_tris);
+  const std::uint64_t fits = budget_for_leaf(largest->source_triangles, earlier_manifest.layout, o.max_tris);
   auto lod0 = [](const fs::path& tree, const NodeInfo& n) {
     auto mesh = read_node_file(tree / n.lods[0].file);
     EXPECT_TRUE(mesh.ok()) << mesh.status().message();
@@ -306,13 +325,13 @@ TEST_F(BakeTest, LeafAtMaxDepthOverTheBudgetsCapIsStreamedIntoTheSameTree) {
     auto streamed = bake(o);
     ASSERT_TRUE(streamed.ok()) << streamed.status().message();
     EXPECT_EQ(streamed->octree_in_memory, in_memory);
-    const Manifest& m = streamed->manifest;
-    ASSERT_EQ(m.nodes.size(), earlier->manifest.nodes.size());
+    const Manifest m = written_manifest(o.output, streamed.value());
+    ASSERT_EQ(m.nodes.size(), earlier_manifest.nodes.size());
     std::size_t changed = 0;
     for (std::size_t i = 0; i < m.nodes.size(); ++i) {
       const NodeInfo& n = m.nodes[i];
-      EXPECT_EQ(n.path, earlier->manifest.nodes[i].path);
-      EXPECT_EQ(n.source_triangles, earlier->manifest.nodes[i].source_triangles);
+      EXPECT_EQ(n.path, earlier_manifest.nodes[i].path);
+      EXPECT_EQ(n.source_triangles, earlier_manifest.nodes[i].source_triangles);
       if (!n.is_leaf()) continue;
       ASSERT_EQ(n.lods.size(), 1u);
       if (n.source_triangles < largest->source_triangles) {
@@ -334,8 +353,8 @@ TEST_F(BakeTest, LeafAtMaxDepthOverTheBudgetsCapIsStreamedIntoTheSameTree) {
   o.output = path("out");
   auto baked = bake(o);
   ASSERT_TRUE(baked.ok()) << baked.status().message();
-  EXPECT_EQ(manifest_to_json(without_run_details(baked->manifest)),
-            manifest_to_json(without_run_details(earlier->manifest)));
+  EXPECT_EQ(manifest_to_json(without_run_details(written_manifest(o.output, baked.value()))),
+            manifest_to_json(without_run_details(earlier_manifest)));
 }
 
 TEST_F(BakeTest, WithoutLodsLeavesHoldOnlyTheirOriginalTrianglesWithTightBounds) {
@@ -343,9 +362,10 @@ TEST_F(BakeTest, WithoutLodsLeavesHoldOnlyTheirOriginalTrianglesWithTightBounds)
   o.lods = false;
   auto baked = bake(o);
   ASSERT_TRUE(baked.ok()) << baked.status().message();
-  EXPECT_EQ(baked->manifest.parameters.method, "");
+  const Manifest m = written_manifest(path("out"), baked.value());
+  EXPECT_EQ(m.parameters.method, "");
   std::size_t leaves = 0;
-  for (const NodeInfo& n : baked->manifest.nodes) {
+  for (const NodeInfo& n : m.nodes) {
     if (!n.is_leaf()) {
       EXPECT_TRUE(n.lods.empty()) << n.path;
       continue;
@@ -409,11 +429,11 @@ TEST_F(BakeTest, TinyBudgetOutOfCoreGivesTheSameTreeAsALargeBudget) {
   EXPECT_EQ(rl->sort_runs, 0u);
   EXPECT_EQ(rr->sort_runs, 0u);
   // Out of core the soup goes straight into the octree sort; in core through a soup file.
-  EXPECT_EQ(rs->manifest.stats.at("soup_streamed_to_sort"), 1.0);
-  EXPECT_EQ(rr->manifest.stats.at("soup_streamed_to_sort"), 0.0);
+  EXPECT_EQ(rs->header.stats.at("soup_streamed_to_sort"), 1.0);
+  EXPECT_EQ(rr->header.stats.at("soup_streamed_to_sort"), 0.0);
   // The small budget keeps few children's LODs in memory: parents re-read the others.
-  EXPECT_GT(rs->manifest.stats.at("lod_rereads"), 0.0);
-  EXPECT_EQ(rl->manifest.stats.at("lod_rereads"), 0.0);
+  EXPECT_GT(rs->header.stats.at("lod_rereads"), 0.0);
+  EXPECT_EQ(rl->header.stats.at("lod_rereads"), 0.0);
   auto a = tree_files(path("small"));
   auto b = tree_files(path("large"));
   auto c = tree_files(path("records"));
@@ -422,10 +442,12 @@ TEST_F(BakeTest, TinyBudgetOutOfCoreGivesTheSameTreeAsALargeBudget) {
   c.erase("manifest.json");
   EXPECT_TRUE(a == b);
   EXPECT_TRUE(c == b);
-  EXPECT_EQ(manifest_to_json(without_run_details(rs->manifest)),
-            manifest_to_json(without_run_details(rl->manifest)));
-  EXPECT_EQ(manifest_to_json(without_run_details(rr->manifest)),
-            manifest_to_json(without_run_details(rl->manifest)));
+  const Manifest ml = written_manifest(path("large"), rl.value());
+  EXPECT_GT(ml.nodes.size(), 20u);
+  EXPECT_EQ(manifest_to_json(without_run_details(written_manifest(path("small"), rs.value()))),
+            manifest_to_json(without_run_details(ml)));
+  EXPECT_EQ(manifest_to_json(without_run_details(written_manifest(path("records"), rr.value()))),
+            manifest_to_json(without_run_details(ml)));
 }
 
 TEST_F(BakeTest, ASecondBakeReplacesTheFirstAtomically) {

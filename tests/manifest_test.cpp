@@ -2,6 +2,7 @@
 
 #include <fstream>
 #include <sstream>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
@@ -129,6 +130,41 @@ TEST(Manifest, WriteIsAtomicAndReadable) {
   for (const auto& entry : std::filesystem::directory_iterator(path.parent_path()))
     EXPECT_EQ(entry.path().string().find("manifest_test.json.tmp"), std::string::npos);
   std::filesystem::remove(path);
+}
+
+// A bake writes its nodes one at a time as it reads them back: the same text as the whole
+// Manifest's, and a node that cannot be produced fails the write without leaving a file.
+TEST(Manifest, NodeByNodeWriteIsTheWholeManifestOrNothing) {
+  const auto dir = std::filesystem::path(::testing::TempDir()) / "manifest_nodes_test";
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  const Manifest m = small_manifest();
+  Manifest header = m;
+  header.nodes.clear();
+  std::vector<std::size_t> asked;
+  ASSERT_TRUE(write_manifest(dir / "streamed.json", header, m.nodes.size(), [&](std::size_t i) -> Result<NodeInfo> {
+                asked.push_back(i);
+                return m.nodes[i];
+              }).ok());
+  EXPECT_EQ(asked, (std::vector<std::size_t>{0, 1, 2}));
+  std::ifstream in(dir / "streamed.json", std::ios::binary);
+  std::stringstream text;
+  text << in.rdbuf();
+  EXPECT_EQ(text.str(), manifest_to_json(m));
+
+  const Status failed = write_manifest(dir / "failed.json", header, m.nodes.size(), [&](std::size_t i) -> Result<NodeInfo> {
+    if (i == 2) return io_error("node-lods.tmp: node 2: cannot read 52 bytes at offset 80");
+    return m.nodes[i];
+  });
+  EXPECT_EQ(failed.code(), ErrorCode::io);
+  EXPECT_NE(failed.message().find("offset 80"), std::string::npos) << failed.message();
+  std::size_t files = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(dir)) {
+    ++files;
+    EXPECT_EQ(entry.path().filename(), "streamed.json");
+  }
+  EXPECT_EQ(files, 1u);
+  std::filesystem::remove_all(dir);
 }
 
 }  // namespace

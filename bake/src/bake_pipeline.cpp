@@ -20,6 +20,7 @@
 #include "octolod/bake/external_sort.h"
 #include "octolod/bake/soup.h"
 #include "lod_tree.h"
+#include "node_lods_log.h"
 #include "octolod/formats/node_file.h"
 #include "octree_build.h"
 #include "page_array.h"
@@ -266,7 +267,7 @@ MaxDepthLeafSpill max_depth_leaf_spill(const BakeOptions& options, VertexLayout 
 struct OctreeResult {
   RootCube cube;
   std::vector<OctreeNode> nodes;
-  std::vector<std::optional<NodeLods>> lods;  // by node index
+  std::optional<NodeLodsLog> lods;  // every node's record
   LodTreeStats lod_stats;
   SortStats sort;
   bool soup_streamed = false; // the soup went straight into the sorter, no soup file
@@ -287,7 +288,7 @@ Status finish_lod_tree(const BakeOptions& options, LodTreeBuilder& lod_tree,
       }));
   result.lod_seconds = seconds_since(start);
   result.nodes = std::move(builder.nodes());
-  result.lods = std::move(lod_tree.results());
+  result.lods.emplace(lod_tree.take_results());
   result.lod_stats = lod_tree.stats();
   return {};
 }
@@ -478,8 +479,9 @@ Result<OctreeResult> build_octree_from_mesh(const BakeOptions& options, unsigned
   OCTOLOD_RETURN_IF_ERROR(finish_lod_tree(options, lod_tree, builder, result));
   return result;
 }
-Manifest assemble_manifest(const BakeOptions& options, unsigned threads, const SoupResult& soup,
-                           OctreeResult& octree) {
+// The manifest without its nodes: the input, the parameters and the model's bounds.
+Result<Manifest> manifest_header(const BakeOptions& options, unsigned threads,
+                                 const SoupResult& soup, const OctreeResult& octree) {
   Manifest m;
   m.layout = soup.layout;
   m.input_vertices = soup.vertex_count;
@@ -490,33 +492,50 @@ Manifest assemble_manifest(const BakeOptions& options, unsigned threads, const S
   m.parameters.memory_budget_bytes = options.memory_budget_bytes;
   m.parameters.threads = threads;
   m.parameters.method = options.lods ? std::string(method_name(options.method)) : "";
-  if (octree.nodes.empty()) {  // no triangles: a root leaf without LODs
-    NodeInfo root;
-    root.cell = octree.cube.cell(0, 0);
-    m.nodes.push_back(root);
+  if (octree.nodes.empty()) {
     m.bounds = soup.bounds;
     return m;
   }
-  m.nodes.resize(octree.nodes.size());
-  for (std::size_t i = 0; i < octree.nodes.size(); ++i) {
-    const OctreeNode& o = octree.nodes[i];
-    NodeInfo& n = m.nodes[i];
-    n.path = o.path();
-    n.depth = o.depth;
-    n.parent = o.parent;
-    n.children = o.children;
-    n.cell = octree.cube.cell(o.prefix, o.depth);
-    n.source_triangles = o.triangles;
-    if (octree.lods[i]) {
-      n.bounds = octree.lods[i]->bounds;
-      n.lods = std::move(octree.lods[i]->lods);
-    }
-  }
-  // Children follow their parents: one backward sweep unites the bounds.
-  for (std::size_t i = m.nodes.size(); i-- > 1;)
-    m.nodes[static_cast<std::size_t>(m.nodes[i].parent)].bounds.extend(m.nodes[i].bounds);
-  m.bounds = m.nodes[0].bounds;
+  auto root = octree.lods->read(0, "");
+  if (!root.ok()) return root.status();
+  m.bounds = root->bounds;  // the subtree's: the whole model's
   return m;
+}
+
+// Node `index` of the manifest, from the octree's node and its LOD record.
+Result<NodeInfo> manifest_node(const OctreeResult& octree, std::size_t index) {
+  NodeInfo n;
+  if (octree.nodes.empty()) {  // no triangles: a root leaf without LODs
+    n.cell = octree.cube.cell(0, 0);
+    return n;
+  }
+  const OctreeNode& o = octree.nodes[index];
+  n.path = o.path();
+  n.depth = o.depth;
+  n.parent = o.parent;
+  n.children = o.children;
+  n.cell = octree.cube.cell(o.prefix, o.depth);
+  n.source_triangles = o.triangles;
+  auto lods = octree.lods->read(static_cast<std::int32_t>(index), n.path);
+  if (!lods.ok()) return lods.status();
+  n.bounds = lods->bounds;
+  n.lods = std::move(lods->lods);
+  return n;
+}
+
+// Writes the manifest of the bake to `path` node by node (nodes are read back from the LOD log,
+// never held together) and counts the report's LODs and bytes.
+Status write_bake_manifest(const fs::path& path, const Manifest& header,
+                           const OctreeResult& octree, BakeReport& report) {
+  const std::size_t count = std::max<std::size_t>(octree.nodes.size(), 1);
+  return write_manifest(path, header, count, [&](std::size_t i) -> Result<NodeInfo> {
+    Result<NodeInfo> n = manifest_node(octree, i);
+    if (!n.ok()) return n;
+    report.lods += n->lods.size();
+    for (const LodInfo& l : n->lods) report.bytes += l.bytes;
+    if (i == 0 && !n->lods.empty()) report.root_coarsest_triangles = n->lods.back().triangles;
+    return n;
+  });
 }
 
 Status check_options(const BakeOptions& options) {
@@ -559,7 +578,6 @@ Result<BakeReport> run_bake(const BakeOptions& options) {
   auto work = TempDir::create(work_parent, "work");
   if (!work.ok()) return work.status();
 
-  Manifest manifest;
   BakeReport report;
   {
     // soup
@@ -601,7 +619,9 @@ Result<BakeReport> run_bake(const BakeOptions& options) {
     if (!octree.ok()) return octree.status();
 
     // manifest
-    manifest = assemble_manifest(options, threads, soup.value(), octree.value());
+    auto header = manifest_header(options, threads, soup.value(), octree.value());
+    if (!header.ok()) return header.status();
+    Manifest& manifest = header.value();
     manifest.stage_seconds["soup"] = soup->seconds.total;
     manifest.stage_seconds["soup.split"] = soup->seconds.split;
     manifest.stage_seconds["soup.sort"] = soup->seconds.sort;
@@ -622,31 +642,29 @@ Result<BakeReport> run_bake(const BakeOptions& options) {
     manifest.stats["octree_sort_runs"] = static_cast<double>(octree->sort.runs);
     manifest.stats["octree_sort_merge_passes"] = octree->sort.merge_passes;
     manifest.stats["soup_streamed_to_sort"] = octree->soup_streamed ? 1 : 0;
-  }
-  work->remove();
-
-  for (const NodeInfo& n : manifest.nodes) {
-    ++report.nodes;
-    if (n.is_leaf()) {
+    report.nodes = std::max<std::size_t>(octree->nodes.size(), 1);
+    report.leaves = octree->nodes.empty() ? 1 : 0;
+    for (const OctreeNode& n : octree->nodes) {
+      if (std::ranges::any_of(n.children, [](std::int32_t c) { return c >= 0; })) continue;
       ++report.leaves;
       report.depth = std::max(report.depth, n.depth);
     }
-    for (const LodInfo& l : n.lods) report.bytes += l.bytes;
+    manifest.stats["nodes"] = static_cast<double>(report.nodes);
+    manifest.stats["leaves"] = static_cast<double>(report.leaves);
+    report.peak_rss_bytes = peak_rss_bytes();
+    manifest.stats["peak_rss_bytes"] = static_cast<double>(report.peak_rss_bytes);
+    manifest.stage_seconds["total"] = seconds_since(start);
+    const fs::path manifest_path = staging->path() / kManifestFileName;
+    OCTOLOD_RETURN_IF_ERROR(write_bake_manifest(manifest_path, manifest, octree.value(), report));
+    report.bytes += fs::file_size(manifest_path, ec);
+    report.header = std::move(manifest);
   }
-  manifest.stats["nodes"] = static_cast<double>(report.nodes);
-  manifest.stats["leaves"] = static_cast<double>(report.leaves);
-  report.peak_rss_bytes = peak_rss_bytes();
-  manifest.stats["peak_rss_bytes"] = static_cast<double>(report.peak_rss_bytes);
-  manifest.stage_seconds["total"] = seconds_since(start);
-  const fs::path manifest_path = staging->path() / kManifestFileName;
-  OCTOLOD_RETURN_IF_ERROR(write_manifest(manifest_path, manifest));
-  report.bytes += fs::file_size(manifest_path, ec);
+  work->remove();
 
   // publish
   if (cleanup_signal_received()) return interrupted();
   OCTOLOD_RETURN_IF_ERROR(publish_directory(staging->path(), output));
   staging->release();
-  report.manifest = std::move(manifest);
   return report;
 }
 

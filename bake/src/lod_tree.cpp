@@ -8,6 +8,7 @@
 #include <chrono>
 #include <condition_variable>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <system_error>
 #include <thread>
@@ -16,9 +17,11 @@
 #include <sys/stat.h>
 
 #include "node_index.h"
+#include "node_lods_log.h"
 #include "octolod/formats/node_file.h"
 #include "streamed_leaf.h"
 #include "temp_dir.h"
+#include "tree_paths.h"
 
 namespace octolod::bake {
 namespace {
@@ -40,19 +43,26 @@ struct ChildLod {
   std::size_t bytes = 0;      // counted in the kept bytes while in memory
 };
 
-// The scheduler's view of one octree node.
+// What a parent collects from its children as they finish.
+struct Pending {
+  std::array<ChildLod, 8> child;  // by octant
+  Bounds bounds;                  // their subtrees' bounds
+};
+
+// The scheduler's view of one octree node: one per node for the whole bake, so it holds only
+// what never changes (the octree node's prefix and depth name its directory and cell) and the
+// counts; a pending parent's children's results hang off it until the parent's task takes them.
 struct Slot {
+  std::uint64_t prefix = 0;  // octant path (octree_build.h), its last octant the one in the parent
   std::int32_t parent = -1;
-  std::uint32_t octant = 0;  // in the parent
-  std::string dir;           // "" for the root
-  Bounds cell;
-  bool closed = false;       // internal node whose children are all known
+  std::uint32_t depth = 0;
   std::uint32_t children = 0;
   std::uint32_t done = 0;    // children whose chains are complete
   std::uint64_t child_triangles = 0;
-  // Children's LODs by octant, allocated by the first delivery and taken by the node's task:
-  // only pending parents hold any (a tree of 10M triangles has ~15K nodes).
-  std::unique_ptr<std::array<ChildLod, 8>> child;
+  bool closed = false;       // internal node whose children are all known
+  // Allocated by the first delivery, taken by the node's task: only pending parents hold one
+  // (a tree of 100M triangles has 212K nodes).
+  std::unique_ptr<Pending> pending;
 };
 
 struct Task {
@@ -103,6 +113,7 @@ class LodTreeBuilder::Impl {
                   std::vector<std::byte>&& records, TempFile streamed) {
     std::unique_lock lock(mutex_);
     if (!error_.ok()) return error_;
+    OCTOLOD_RETURN_IF_ERROR(open_log());
     register_nodes(nodes);
     close_off_path(node, nodes);
     Task task;
@@ -133,6 +144,7 @@ class LodTreeBuilder::Impl {
                 const std::function<void(std::uint64_t, std::uint64_t)>& progress) {
     {
       std::unique_lock lock(mutex_);
+      OCTOLOD_RETURN_IF_ERROR(open_log());
       register_nodes(nodes);
       while (!open_.empty()) {
         close(open_.back(), nodes);
@@ -158,27 +170,35 @@ class LodTreeBuilder::Impl {
     }
     stop();
     std::lock_guard lock(mutex_);
+    if (error_.ok()) error_ = log_->finish();
     if (error_.ok() && progress) progress(completed_, total_nodes_);
     return error_;
   }
 
-  std::vector<std::optional<NodeLods>>& results() { return results_; }
+  NodeLodsLog take_results() { return std::move(*log_); }
   const LodTreeStats& stats() const { return stats_; }
 
  private:
-  // Slots for the nodes the builder created since the last call (their parent, octant, path and
-  // cell never change once created). Under the lock.
+  // The node records' log, on the first call. Under the lock.
+  Status open_log() {
+    if (log_) return {};
+    auto log = NodeLodsLog::create(options_.work_dir);
+    if (!log.ok()) return log.status();
+    log_.emplace(std::move(log).value());
+    return {};
+  }
+
+  // Slots for the nodes the builder created since the last call (their parent, prefix and depth
+  // never change once created). Under the lock.
   void register_nodes(const std::vector<OctreeNode>& nodes) {
     for (std::size_t i = slots_.size(); i < nodes.size(); ++i) {
       const OctreeNode& n = nodes[i];
       Slot s;
+      s.prefix = n.prefix;
       s.parent = n.parent;
-      s.octant = static_cast<std::uint32_t>(n.prefix & 7u);
-      s.dir = n.path();
-      s.cell = options_.cube.cell(n.prefix, n.depth);
+      s.depth = n.depth;
       slots_.push_back(std::move(s));
     }
-    results_.resize(slots_.size());
   }
 
   // Keys arrive in order: the internal nodes on the previous leaf's path that are not on this
@@ -224,13 +244,16 @@ class LodTreeBuilder::Impl {
     std::pop_heap(heap_.begin(), heap_.end(), later);
     Task task = std::move(heap_.back());
     heap_.pop_back();
-    const Slot& slot = slots_[static_cast<std::size_t>(task.node)];
-    const std::string dir = slot.dir;
-    const Bounds cell = slot.cell;
-    std::unique_ptr<std::array<ChildLod, 8>> taken =
-        std::move(slots_[static_cast<std::size_t>(task.node)].child);
+    Slot& slot = slots_[static_cast<std::size_t>(task.node)];
+    const std::string dir = node_path(slot.prefix, slot.depth);
+    const Bounds cell = options_.cube.cell(slot.prefix, slot.depth);
+    std::unique_ptr<Pending> taken = std::move(slot.pending);
     std::array<ChildLod, 8> children;
-    if (taken) children = std::move(*taken);
+    Bounds below;  // the children's subtrees
+    if (taken) {
+      children = std::move(taken->child);
+      below = taken->bounds;
+    }
     taken.reset();
     lock.unlock();
 
@@ -255,6 +278,7 @@ class LodTreeBuilder::Impl {
     if (!done.ok()) {
       if (error_.ok()) error_ = done.status();
     } else if (error_.ok()) {
+      done->lods.bounds.extend(below);
       deliver(task.node, std::move(done).value());
     }
     space_.notify_all();
@@ -353,8 +377,7 @@ class LodTreeBuilder::Impl {
     NodeDone done;
     for (std::size_t i = 0; i < lods.size(); ++i) {
       const NodeMesh& mesh = lods[i].mesh;
-      const std::string file =
-          (dir.empty() ? "" : dir + "/") + "lod" + std::to_string(first + i) + ".olod";
+      const std::string file = lod_file_name(dir, first + i);
       OCTOLOD_RETURN_IF_ERROR(write_node_file(options_.root / file, mesh));
       LodInfo info;
       info.triangles = static_cast<std::uint32_t>(mesh.triangle_count());
@@ -375,17 +398,18 @@ class LodTreeBuilder::Impl {
     ++completed_;
     const Slot& s = slots_[static_cast<std::size_t>(node)];
     const std::int32_t parent = s.parent;
-    const std::uint32_t octant = s.octant;
+    const auto octant = static_cast<std::size_t>(s.prefix & 7u);
     const bool has_lod = options_.build_lods && !done.lods.lods.empty();
-    results_[static_cast<std::size_t>(node)] = std::move(done.lods);
-    if (parent < 0) return;
+    error_ = log_->append(node, done.lods);
+    if (!error_.ok() || parent < 0) return;
     Slot& p = slots_[static_cast<std::size_t>(parent)];
     ++p.done;
+    if (!p.pending) p.pending = std::make_unique<Pending>();
+    p.pending->bounds.extend(done.lods.bounds);
     if (has_lod) {
-      if (!p.child) p.child = std::make_unique<std::array<ChildLod, 8>>();
-      ChildLod& c = (*p.child)[octant];
+      ChildLod& c = p.pending->child[octant];
       c.present = true;
-      c.lods = results_[static_cast<std::size_t>(node)]->lods;
+      c.lods = std::move(done.lods.lods);
       p.child_triangles += c.lods.front().triangles;
       const std::size_t bytes = mesh_bytes(done.finest);
       // a LOD 0 larger than a whole merged input is only merged where nothing coarser exists:
@@ -433,7 +457,7 @@ class LodTreeBuilder::Impl {
   std::vector<Task> heap_;         // ready nodes, heaviest on top
   std::vector<Slot> slots_;        // by node index
   std::vector<std::int32_t> open_; // internal nodes on the last leaf's path, root first
-  std::vector<std::optional<NodeLods>> results_;
+  std::optional<NodeLodsLog> log_;  // every finished node's record
   std::size_t queued_bytes_ = 0;   // records of leaves not yet done
   std::size_t kept_bytes_ = 0;     // children's LODs held for their parents
   std::uint64_t completed_ = 0;
@@ -489,7 +513,7 @@ Status LodTreeBuilder::finish(const std::vector<OctreeNode>& nodes,
   return impl_->finish(nodes, progress);
 }
 
-std::vector<std::optional<NodeLods>>& LodTreeBuilder::results() { return impl_->results(); }
+NodeLodsLog LodTreeBuilder::take_results() { return impl_->take_results(); }
 const LodTreeStats& LodTreeBuilder::stats() const { return impl_->stats(); }
 
 }  // namespace octolod::bake

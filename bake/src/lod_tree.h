@@ -34,7 +34,8 @@
 // Memory: the leaves waiting for a thread (queue_bytes), the node work in flight (an internal
 // node's input is at most merge_bytes of mesh), and the children's finest LODs kept for their
 // pending parents up to keep_bytes; past that, or when the parent merges a coarser one, the
-// parent reads the child's file (identical bytes).
+// parent reads the child's file (identical bytes). A finished node's records go to a work file
+// (node_lods_log.h): what stays per node is its scheduler slot (~56 bytes) and 8 bytes of log.
 #pragma once
 
 #include <cstddef>
@@ -42,7 +43,6 @@
 #include <filesystem>
 #include <functional>
 #include <memory>
-#include <optional>
 #include <string_view>
 #include <vector>
 
@@ -58,9 +58,11 @@ namespace octolod::bake {
 
 // What the LOD stage produced for one node.
 struct NodeLods {
-  Bounds bounds;              // tight bounds of every LOD of the node, model units
+  Bounds bounds;              // tight bounds of the node's LODs and its subtree's, model units
   std::vector<LodInfo> lods;  // finest first, files relative to the tree root
 };
+
+class NodeLodsLog;
 
 struct LodTreeOptions {
   std::filesystem::path root;  // the tree being written: node files go to root / node path
@@ -84,7 +86,7 @@ struct LodTreeOptions {
   std::uint64_t streamed_chunk_triangles = 1 << 16;
   std::uint64_t streamed_max_lod1_triangles = 1 << 14;
   std::uint64_t streamed_sort_bytes = 4 << 20;
-  std::filesystem::path work_dir;
+  std::filesystem::path work_dir;  // the streamed leaves' and the node records' work files
 };
 
 // Bytes of the NodeMesh of a LOD: its vertex floats and its indices.
@@ -128,8 +130,9 @@ class LodTreeBuilder {
   Status finish(const std::vector<OctreeNode>& nodes,
                 const std::function<void(std::uint64_t, std::uint64_t)>& progress);
 
-  // By node index; complete after a successful finish().
-  std::vector<std::optional<NodeLods>>& results();
+  // Every node's record (its bounds include its subtree's), by node index: complete after a
+  // successful finish(), which flushed it. Moves the log out of the builder.
+  NodeLodsLog take_results();
   const LodTreeStats& stats() const;
 
  private:

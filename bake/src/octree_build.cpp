@@ -8,17 +8,11 @@
 #include <utility>
 
 #include "morton.h"
+#include "tree_paths.h"
 
 namespace octolod::bake {
 
-std::string OctreeNode::path() const {
-  std::string p;
-  for (std::uint32_t k = 0; k < depth; ++k) {
-    if (!p.empty()) p += '/';
-    p += static_cast<char>('0' + ((prefix >> (3 * (depth - 1 - k))) & 7u));
-  }
-  return p;
-}
+std::string OctreeNode::path() const { return node_path(prefix, depth); }
 
 OctreeBuilder::OctreeBuilder(std::uint32_t max_tris, std::uint32_t max_depth,
                              std::size_t record_bytes, std::size_t tie_offset, LeafFn on_leaf,

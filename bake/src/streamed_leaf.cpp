@@ -23,6 +23,7 @@
 #include "octolod/bake/soup.h"
 #include "octolod/formats/node_file.h"
 #include "quadric.h"
+#include "tree_paths.h"
 #include "wedges.h"
 
 namespace octolod::bake {
@@ -623,7 +624,7 @@ Result<StreamedLeafLods> build_streamed_leaf(const fs::path& records, const fs::
   OCTOLOD_RETURN_IF_ERROR(builder.survey(edges.path()));
 
   StreamedLeafLods result;
-  const std::string file = (dir.empty() ? "" : dir + "/") + "lod0.olod";
+  const std::string file = lod_file_name(dir, 0);
   auto bytes = builder.write_lod0(root / file);
   if (!bytes.ok()) return bytes.status();
   const Survey& survey = builder.surveyed();

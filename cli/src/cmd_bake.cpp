@@ -21,19 +21,8 @@
 namespace octolod::cli {
 namespace {
 
-std::uint64_t lod_count(const Manifest& m) {
-  std::uint64_t n = 0;
-  for (const NodeInfo& node : m.nodes) n += node.lods.size();
-  return n;
-}
-
-// Triangles of the root's coarsest LOD: what the whole asset costs from far away.
-std::uint64_t root_coarsest_triangles(const Manifest& m) {
-  return m.nodes.empty() || m.nodes[0].lods.empty() ? 0 : m.nodes[0].lods.back().triangles;
-}
-
 nlohmann::json report_json(const bake::BakeReport& r, const std::string& output) {
-  const Manifest& m = r.manifest;
+  const Manifest& m = r.header;
   return {{"output", output},
           {"input", m.parameters.input},
           {"vertices", m.input_vertices},
@@ -52,8 +41,8 @@ nlohmann::json report_json(const bake::BakeReport& r, const std::string& output)
             {"memory_budget_bytes", m.parameters.memory_budget_bytes},
             {"threads", m.parameters.threads},
             {"method", m.parameters.method}}},
-          {"lods", lod_count(m)},
-          {"root_coarsest_triangles", root_coarsest_triangles(m)},
+          {"lods", r.lods},
+          {"root_coarsest_triangles", r.root_coarsest_triangles},
           {"stage_seconds", m.stage_seconds},
           {"stats", m.stats}};
 }
@@ -96,7 +85,7 @@ int run_bake(const BakeArgs& args, const CommandContext& context) {
   Result<bake::BakeReport> baked = bake::bake(options);
   if (!baked.ok()) return report(baked.status());
   const bake::BakeReport& r = baked.value();
-  const auto& seconds = r.manifest.stage_seconds;
+  const auto& seconds = r.header.stage_seconds;
   auto stage = [&](const char* name) {
     auto it = seconds.find(name);
     return it == seconds.end() ? 0.0 : it->second;
@@ -110,11 +99,11 @@ int run_bake(const BakeArgs& args, const CommandContext& context) {
       "%s: %llu triangles (%s) -> %llu nodes, %llu leaves, depth %u, %llu LODs (root's coarsest "
       "%llu triangles), %.1f MB in %.2f s (soup %.2f s, octree + overlapping LODs %.2f s, LODs "
       "after the stream %.2f s), peak RSS %.1f MiB\n",
-      args.output.c_str(), static_cast<unsigned long long>(r.manifest.input_triangles),
-      r.manifest.layout.describe().c_str(), static_cast<unsigned long long>(r.nodes),
+      args.output.c_str(), static_cast<unsigned long long>(r.header.input_triangles),
+      r.header.layout.describe().c_str(), static_cast<unsigned long long>(r.nodes),
       static_cast<unsigned long long>(r.leaves), r.depth,
-      static_cast<unsigned long long>(lod_count(r.manifest)),
-      static_cast<unsigned long long>(root_coarsest_triangles(r.manifest)),
+      static_cast<unsigned long long>(r.lods),
+      static_cast<unsigned long long>(r.root_coarsest_triangles),
       static_cast<double>(r.bytes) / 1e6, stage("total"), stage("soup"), stage("octree"),
       stage("lods"), static_cast<double>(r.peak_rss_bytes) / (1 << 20));
   return 0;

@@ -1,6 +1,7 @@
 // manifest.json reading/writing and validation; the schema is documented in docs/formats.md.
 #include "octolod/formats/manifest.h"
 
+#include <cassert>
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
@@ -120,9 +121,10 @@ json node_to_json(const NodeInfo& n) {
 
 // The manifest's text, exactly as dump(1) of the whole document would write it (keys sorted,
 // one space per level), handed to `out` piece by piece: the header members, then one node at a
-// time, so the memory is one node's JSON, not the tree's (about 1.5 KB per node as a DOM).
-// Stops at the first false `out` returns; returns whether every piece was taken.
-bool emit_manifest(const Manifest& m, const std::function<bool(std::string_view)>& out) {
+// time as `node` produces it, so the memory is one node's JSON, not the tree's (about 1.5 KB per
+// node as a DOM). The first error of `node` or `out` ends it.
+Status emit_manifest(const Manifest& m, std::size_t node_count, const ManifestNodeFn& node,
+                     const std::function<Status(std::string_view)>& out) {
   const json head{{"format", "octolod-manifest"},
                   {"version", m.version},
                   {"layout", layout_to_json(m.layout)},
@@ -141,44 +143,52 @@ bool emit_manifest(const Manifest& m, const std::function<bool(std::string_view)
     piece += json(key).dump();
     piece += ": ";
   };
-  const auto emit_nodes = [&] {
+  const auto emit_nodes = [&]() -> Status {
     start_member("nodes");
-    if (m.nodes.empty()) {
+    if (node_count == 0) {
       piece += "[]";
-      return true;
+      return {};
     }
     piece += "[\n";
-    for (std::size_t i = 0; i < m.nodes.size(); ++i) {
+    for (std::size_t i = 0; i < node_count; ++i) {
+      Result<NodeInfo> n = node(i);
+      if (!n.ok()) return n.status();
       piece += "  ";
-      append_nested(piece, node_to_json(m.nodes[i]), 2);
-      piece += i + 1 < m.nodes.size() ? ",\n" : "\n ]";
-      if (!out(piece)) return false;
+      append_nested(piece, node_to_json(n.value()), 2);
+      piece += i + 1 < node_count ? ",\n" : "\n ]";
+      OCTOLOD_RETURN_IF_ERROR(out(piece));
       piece.clear();
     }
-    return true;
+    return {};
   };
   bool nodes_done = false;
   for (const auto& [key, value] : head.items()) {  // sorted by key, as dump() orders them
     if (!nodes_done && key > "nodes") {
-      if (!emit_nodes()) return false;
+      OCTOLOD_RETURN_IF_ERROR(emit_nodes());
       nodes_done = true;
     }
     start_member(key);
     append_nested(piece, value, 1);
   }
-  if (!nodes_done && !emit_nodes()) return false;
+  if (!nodes_done) OCTOLOD_RETURN_IF_ERROR(emit_nodes());
   piece += "\n}\n";
   return out(piece);
+}
+
+ManifestNodeFn nodes_of(const Manifest& m) {
+  return [&m](std::size_t i) -> Result<NodeInfo> { return m.nodes[i]; };
 }
 
 }  // namespace
 
 std::string manifest_to_json(const Manifest& m) {
   std::string text;
-  emit_manifest(m, [&](std::string_view piece) {
+  const Status done = emit_manifest(m, m.nodes.size(), nodes_of(m), [&](std::string_view piece) {
     text += piece;
-    return true;
+    return Status{};
   });
+  assert(done.ok());  // neither the nodes nor the string can fail
+  (void)done;
   return text;
 }
 
@@ -271,28 +281,26 @@ Result<Manifest> manifest_from_json(std::string_view text, std::string_view name
 }
 
 Status write_manifest(const std::filesystem::path& path, const Manifest& manifest) {
+  return write_manifest(path, manifest, manifest.nodes.size(), nodes_of(manifest));
+}
+
+Status write_manifest(const std::filesystem::path& path, const Manifest& header,
+                      std::size_t node_count, const ManifestNodeFn& node) {
   std::filesystem::path tmp = path;
   tmp += ".tmp-" + std::to_string(::getpid());
   std::FILE* f = std::fopen(tmp.c_str(), "wb");
   if (!f) return io_error(tmp.string() + ": cannot create: " + std::strerror(errno));
-  int saved = 0;
-  bool ok = emit_manifest(manifest, [&](std::string_view piece) {
-    if (std::fwrite(piece.data(), 1, piece.size(), f) == piece.size()) return true;
-    saved = errno;
-    return false;
+  const auto write_failed = [&] { return io_error(path.string() + ": write failed: " + std::strerror(errno)); };
+  Status status = emit_manifest(header, node_count, node, [&](std::string_view piece) -> Status {
+    if (std::fwrite(piece.data(), 1, piece.size(), f) == piece.size()) return {};
+    return write_failed();
   });
-  if (ok && std::fflush(f) != 0) {
-    ok = false;
-    saved = errno;
-  }
-  if (std::fclose(f) != 0 && ok) {
-    ok = false;
-    saved = errno;
-  }
+  if (status.ok() && std::fflush(f) != 0) status = write_failed();
+  if (std::fclose(f) != 0 && status.ok()) status = write_failed();
   std::error_code ec;
-  if (!ok) {
+  if (!status.ok()) {
     std::filesystem::remove(tmp, ec);
-    return io_error(path.string() + ": write failed: " + std::strerror(saved));
+    return status;
   }
   std::filesystem::rename(tmp, path, ec);
   if (ec) {

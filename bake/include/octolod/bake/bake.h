@@ -123,7 +123,11 @@ std::uint64_t max_depth_leaf_triangles(std::uint64_t memory_budget_bytes, Vertex
                                        std::uint32_t max_tris);
 
 struct BakeReport {
-  Manifest manifest;             // as written to OUT_DIR/manifest.json
+  // OUT_DIR/manifest.json as written, without its nodes (`nodes` is empty: a large tree's nodes
+  // are never held together; read_tree_manifest(OUT_DIR) has them)
+  Manifest header;
+  std::uint64_t lods = 0;        // node LODs of the whole tree
+  std::uint32_t root_coarsest_triangles = 0;  // what the whole model costs from far away
   std::uint64_t nodes = 0;
   std::uint64_t leaves = 0;
   std::uint32_t depth = 0;       // deepest leaf

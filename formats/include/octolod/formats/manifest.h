@@ -9,6 +9,7 @@
 #include <array>
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <map>
 #include <string>
 #include <string_view>
@@ -83,6 +84,14 @@ Result<Manifest> manifest_from_json(std::string_view text, std::string_view name
 
 // write_manifest writes atomically (temporary sibling + rename).
 Status write_manifest(const std::filesystem::path& path, const Manifest& manifest);
+// A tree's nodes produced one at a time, in index order (index 0 .. count - 1, each once), for
+// writers that do not hold them all (a 100M-triangle bake has 212K nodes).
+using ManifestNodeFn = std::function<Result<NodeInfo>(std::size_t index)>;
+// write_manifest of `header` (its `nodes` ignored) with the `node_count` nodes `node` produces:
+// the same text as write_manifest of the whole Manifest. The first error of `node` ends the
+// write and is returned; nothing is left at `path` then.
+Status write_manifest(const std::filesystem::path& path, const Manifest& header,
+                      std::size_t node_count, const ManifestNodeFn& node);
 Result<Manifest> read_manifest(const std::filesystem::path& path);
 // read_manifest of the manifest.json at the root of a baked tree (the OUT_DIR of a bake).
 Result<Manifest> read_tree_manifest(const std::filesystem::path& tree_root);

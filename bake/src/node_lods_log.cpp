@@ -1,0 +1,130 @@
+// The finished nodes' LOD records in a work file, see node_lods_log.h.
+#include "node_lods_log.h"
+
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <cassert>
+#include <cerrno>
+#include <cstring>
+#include <string>
+#include <utility>
+
+#include "tree_paths.h"
+
+namespace octolod::bake {
+namespace {
+
+constexpr std::uint64_t kAbsent = ~std::uint64_t{0};
+
+// The record: a header, then one LodRecord per LOD, finest first.
+struct RecordHeader {
+  std::uint32_t lods = 0;
+  Bounds bounds;
+};
+struct LodRecord {
+  std::uint32_t triangles = 0;
+  std::uint32_t vertices = 0;
+  double error = 0;
+  std::uint64_t bytes = 0;
+};
+
+}  // namespace
+
+Result<NodeLodsLog> NodeLodsLog::create(const std::filesystem::path& work_dir) {
+  NodeLodsLog log;
+  log.file_ = make_temp_file(work_dir, "node-lods");
+  auto writer = RecordWriter::create(log.file_.path(), 1, std::size_t{64} << 10);
+  if (!writer.ok()) return writer.status();
+  log.writer_.emplace(std::move(writer).value());
+  return log;
+}
+
+NodeLodsLog::NodeLodsLog(NodeLodsLog&& other) noexcept
+    : file_(std::move(other.file_)),
+      writer_(std::move(other.writer_)),
+      fd_(std::exchange(other.fd_, -1)),
+      offsets_(std::move(other.offsets_)) {
+  other.writer_.reset();
+}
+
+NodeLodsLog& NodeLodsLog::operator=(NodeLodsLog&& other) noexcept {
+  if (this != &other) {
+    if (fd_ >= 0) ::close(fd_);
+    writer_.reset();  // before the file it writes is removed
+    file_ = std::move(other.file_);
+    writer_ = std::move(other.writer_);
+    other.writer_.reset();
+    fd_ = std::exchange(other.fd_, -1);
+    offsets_ = std::move(other.offsets_);
+  }
+  return *this;
+}
+
+NodeLodsLog::~NodeLodsLog() {
+  if (fd_ >= 0) ::close(fd_);
+  writer_.reset();
+}
+
+Status NodeLodsLog::append(std::int32_t node, const NodeLods& lods) {
+  assert(writer_ && node >= 0 && !has(node) && lods.lods.size() <= kMaxLods);
+  const auto index = static_cast<std::size_t>(node);
+  if (offsets_.size() <= index) offsets_.resize(index + 1, kAbsent);
+  offsets_[index] = writer_->records_written();
+  std::vector<std::byte> record(sizeof(RecordHeader) + lods.lods.size() * sizeof(LodRecord));
+  RecordHeader header;
+  header.lods = static_cast<std::uint32_t>(lods.lods.size());
+  header.bounds = lods.bounds;
+  std::memcpy(record.data(), &header, sizeof header);
+  for (std::size_t i = 0; i < lods.lods.size(); ++i) {
+    const LodInfo& l = lods.lods[i];
+    const LodRecord r{l.triangles, l.vertices, l.error, l.bytes};
+    std::memcpy(record.data() + sizeof header + i * sizeof r, &r, sizeof r);
+  }
+  return writer_->append(record.data(), record.size());
+}
+
+Status NodeLodsLog::finish() {
+  assert(writer_);
+  OCTOLOD_RETURN_IF_ERROR(writer_->finish());
+  writer_.reset();
+  fd_ = ::open(file_.path().c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd_ < 0) return io_error(file_.path().string() + ": cannot open: " + std::strerror(errno));
+  return {};
+}
+
+bool NodeLodsLog::has(std::int32_t node) const {
+  const auto index = static_cast<std::size_t>(node);
+  return node >= 0 && index < offsets_.size() && offsets_[index] != kAbsent;
+}
+
+Result<NodeLods> NodeLodsLog::read(std::int32_t node, std::string_view dir) const {
+  assert(fd_ >= 0 && has(node));
+  const std::uint64_t offset = offsets_[static_cast<std::size_t>(node)];
+  const auto read_at = [&](void* dst, std::size_t bytes, std::uint64_t at) -> Status {
+    const ssize_t got = ::pread(fd_, dst, bytes, static_cast<off_t>(at));
+    if (got == static_cast<ssize_t>(bytes)) return {};
+    return io_error(file_.path().string() + ": node " + std::to_string(node) +
+                    ": cannot read " + std::to_string(bytes) + " bytes at offset " +
+                    std::to_string(at) + (got < 0 ? std::string(": ") + std::strerror(errno) : ""));
+  };
+  RecordHeader header;
+  OCTOLOD_RETURN_IF_ERROR(read_at(&header, sizeof header, offset));
+  if (header.lods > kMaxLods) {
+    return io_error(file_.path().string() + ": node " + std::to_string(node) + ": " +
+                    std::to_string(header.lods) + " LODs at offset " + std::to_string(offset));
+  }
+  std::vector<LodRecord> records(header.lods);
+  OCTOLOD_RETURN_IF_ERROR(
+      read_at(records.data(), records.size() * sizeof(LodRecord), offset + sizeof header));
+  NodeLods lods;
+  lods.bounds = header.bounds;
+  lods.lods.reserve(records.size());
+  for (std::size_t i = 0; i < records.size(); ++i) {
+    const LodRecord& r = records[i];
+    lods.lods.push_back(LodInfo{r.triangles, r.vertices, r.error, r.bytes, lod_file_name(dir, i)});
+  }
+  return lods;
+}
+
+}  // namespace octolod::bake
