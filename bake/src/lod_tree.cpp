@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cassert>
 #include <cerrno>
 #include <chrono>
 #include <condition_variable>
@@ -12,6 +13,7 @@
 #include <string>
 #include <system_error>
 #include <thread>
+#include <unordered_map>
 #include <utility>
 
 #include <sys/stat.h>
@@ -49,9 +51,10 @@ struct Pending {
   Bounds bounds;                  // their subtrees' bounds
 };
 
-// The scheduler's view of one octree node: one per node for the whole bake, so it holds only
-// what never changes (the octree node's prefix and depth name its directory and cell) and the
-// counts; a pending parent's children's results hang off it until the parent's task takes them.
+// The scheduler's view of one octree node, from its creation until it is delivered (the open
+// nodes of the tree, not all of them): what never changes (the octree node's prefix and depth
+// name its directory and cell) and the counts; a pending parent's children's results hang off
+// it until the parent's task takes them.
 struct Slot {
   std::uint64_t prefix = 0;  // octant path (octree_build.h), its last octant the one in the parent
   std::int32_t parent = -1;
@@ -179,6 +182,12 @@ class LodTreeBuilder::Impl {
   const LodTreeStats& stats() const { return stats_; }
 
  private:
+  Slot& slot(std::int32_t node) {
+    const auto it = slots_.find(node);
+    assert(it != slots_.end() && "a node's slot lives until it is delivered");
+    return it->second;
+  }
+
   // The node records' log, on the first call. Under the lock.
   Status open_log() {
     if (log_) return {};
@@ -191,14 +200,15 @@ class LodTreeBuilder::Impl {
   // Slots for the nodes the builder created since the last call (their parent, prefix and depth
   // never change once created). Under the lock.
   void register_nodes(const std::vector<OctreeNode>& nodes) {
-    for (std::size_t i = slots_.size(); i < nodes.size(); ++i) {
+    for (std::size_t i = registered_; i < nodes.size(); ++i) {
       const OctreeNode& n = nodes[i];
       Slot s;
       s.prefix = n.prefix;
       s.parent = n.parent;
       s.depth = n.depth;
-      slots_.push_back(std::move(s));
+      slots_.emplace(static_cast<std::int32_t>(i), std::move(s));
     }
+    registered_ = nodes.size();
   }
 
   // Keys arrive in order: the internal nodes on the previous leaf's path that are not on this
@@ -220,7 +230,7 @@ class LodTreeBuilder::Impl {
   }
 
   void close(std::int32_t node, const std::vector<OctreeNode>& nodes) {
-    Slot& s = slots_[static_cast<std::size_t>(node)];
+    Slot& s = slot(node);
     s.closed = true;
     for (std::int32_t c : nodes[static_cast<std::size_t>(node)].children) s.children += c >= 0;
     if (s.done == s.children) push_internal(node);
@@ -229,7 +239,7 @@ class LodTreeBuilder::Impl {
   void push_internal(std::int32_t node) {
     Task task;
     task.node = node;
-    task.weight = slots_[static_cast<std::size_t>(node)].child_triangles;
+    task.weight = slot(node).child_triangles;
     push(std::move(task));
   }
 
@@ -244,10 +254,10 @@ class LodTreeBuilder::Impl {
     std::pop_heap(heap_.begin(), heap_.end(), later);
     Task task = std::move(heap_.back());
     heap_.pop_back();
-    Slot& slot = slots_[static_cast<std::size_t>(task.node)];
-    const std::string dir = node_path(slot.prefix, slot.depth);
-    const Bounds cell = options_.cube.cell(slot.prefix, slot.depth);
-    std::unique_ptr<Pending> taken = std::move(slot.pending);
+    Slot& s = slot(task.node);
+    const std::string dir = node_path(s.prefix, s.depth);
+    const Bounds cell = options_.cube.cell(s.prefix, s.depth);
+    std::unique_ptr<Pending> taken = std::move(s.pending);
     std::array<ChildLod, 8> children;
     Bounds below;  // the children's subtrees
     if (taken) {
@@ -396,13 +406,14 @@ class LodTreeBuilder::Impl {
   // kept bytes allow), which becomes ready with its last child. Under the lock.
   void deliver(std::int32_t node, NodeDone done) {
     ++completed_;
-    const Slot& s = slots_[static_cast<std::size_t>(node)];
-    const std::int32_t parent = s.parent;
-    const auto octant = static_cast<std::size_t>(s.prefix & 7u);
+    const auto done_slot = slots_.find(node);
+    const std::int32_t parent = done_slot->second.parent;
+    const auto octant = static_cast<std::size_t>(done_slot->second.prefix & 7u);
+    slots_.erase(done_slot);
     const bool has_lod = options_.build_lods && !done.lods.lods.empty();
     error_ = log_->append(node, done.lods);
     if (!error_.ok() || parent < 0) return;
-    Slot& p = slots_[static_cast<std::size_t>(parent)];
+    Slot& p = slot(parent);
     ++p.done;
     if (!p.pending) p.pending = std::make_unique<Pending>();
     p.pending->bounds.extend(done.lods.bounds);
@@ -455,7 +466,9 @@ class LodTreeBuilder::Impl {
   std::condition_variable work_;   // tasks or stop for the workers
   std::condition_variable space_;  // a task finished: queue room, progress, new tasks
   std::vector<Task> heap_;         // ready nodes, heaviest on top
-  std::vector<Slot> slots_;        // by node index
+  // by node index, from register_nodes until delivered: the open nodes, not the tree's
+  std::unordered_map<std::int32_t, Slot> slots_;
+  std::size_t registered_ = 0;     // nodes given a slot so far
   std::vector<std::int32_t> open_; // internal nodes on the last leaf's path, root first
   std::optional<NodeLodsLog> log_;  // every finished node's record
   std::size_t queued_bytes_ = 0;   // records of leaves not yet done

@@ -35,7 +35,7 @@
 // node's input is at most merge_bytes of mesh), and the children's finest LODs kept for their
 // pending parents up to keep_bytes; past that, or when the parent merges a coarser one, the
 // parent reads the child's file (identical bytes). A finished node's records go to a work file
-// (node_lods_log.h): what stays per node is its scheduler slot (~56 bytes) and 8 bytes of log.
+// (node_lods_log.h) and its scheduler slot is dropped: what stays per node is 8 bytes of log.
 #pragma once
 
 #include <cstddef>
