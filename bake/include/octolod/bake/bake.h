@@ -33,6 +33,8 @@
 // fixed footprint, plus up to a quarter of the budget for each leaf at max_depth larger than
 // usual in work (each thread may hold one); a leaf at max_depth too large for that
 // quarter (max_depth_leaf_triangles) is built streaming from a temporary file within it.
+// Outside the budget, per octree node: 72 bytes (the octree's node, the offset of its LOD
+// record, which waits in a work file until the manifest is written node by node from it).
 #pragma once
 
 #include <cstdint>
