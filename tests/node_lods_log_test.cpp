@@ -17,7 +17,9 @@ namespace fs = std::filesystem;
 class NodeLodsLogTest : public ::testing::Test {
  protected:
   void SetUp() override {
-    dir_ = fs::path(::testing::TempDir()) / "node_lods_log_test";
+    // one directory per test: ctest runs the cases as parallel processes
+    dir_ = fs::path(::testing::TempDir()) /
+           ("node_lods_log_test-" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
     fs::remove_all(dir_);
     fs::create_directories(dir_);
   }
