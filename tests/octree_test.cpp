@@ -84,7 +84,7 @@ struct Stream {
 };
 
 struct BuiltTree {
-  std::vector<OctreeNode> nodes;
+  OctreeNodes nodes;
   std::map<std::int32_t, std::vector<std::uint64_t>> leaves;  // node -> record ids
 };
 

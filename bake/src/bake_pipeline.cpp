@@ -266,7 +266,7 @@ MaxDepthLeafSpill max_depth_leaf_spill(const BakeOptions& options, VertexLayout 
 
 struct OctreeResult {
   RootCube cube;
-  std::vector<OctreeNode> nodes;
+  OctreeNodes nodes;
   std::optional<NodeLodsLog> lods;  // every node's record
   LodTreeStats lod_stats;
   SortStats sort;

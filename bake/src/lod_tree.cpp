@@ -112,7 +112,7 @@ class LodTreeBuilder::Impl {
   }
   ~Impl() { stop(); }
 
-  Status add_leaf(std::int32_t node, const std::vector<OctreeNode>& nodes,
+  Status add_leaf(std::int32_t node, const OctreeNodes& nodes,
                   std::vector<std::byte>&& records, TempFile streamed) {
     std::unique_lock lock(mutex_);
     if (!error_.ok()) return error_;
@@ -143,7 +143,7 @@ class LodTreeBuilder::Impl {
     return error_;
   }
 
-  Status finish(const std::vector<OctreeNode>& nodes,
+  Status finish(const OctreeNodes& nodes,
                 const std::function<void(std::uint64_t, std::uint64_t)>& progress) {
     {
       std::unique_lock lock(mutex_);
@@ -199,7 +199,7 @@ class LodTreeBuilder::Impl {
 
   // Slots for the nodes the builder created since the last call (their parent, prefix and depth
   // never change once created). Under the lock.
-  void register_nodes(const std::vector<OctreeNode>& nodes) {
+  void register_nodes(const OctreeNodes& nodes) {
     for (std::size_t i = registered_; i < nodes.size(); ++i) {
       const OctreeNode& n = nodes[i];
       Slot s;
@@ -213,7 +213,7 @@ class LodTreeBuilder::Impl {
 
   // Keys arrive in order: the internal nodes on the previous leaf's path that are not on this
   // leaf's path have received all their children. Under the lock.
-  void close_off_path(std::int32_t leaf, const std::vector<OctreeNode>& nodes) {
+  void close_off_path(std::int32_t leaf, const OctreeNodes& nodes) {
     std::vector<std::int32_t> path;
     for (std::int32_t p = nodes[static_cast<std::size_t>(leaf)].parent; p >= 0;
          p = nodes[static_cast<std::size_t>(p)].parent)
@@ -229,7 +229,7 @@ class LodTreeBuilder::Impl {
     open_ = std::move(path);
   }
 
-  void close(std::int32_t node, const std::vector<OctreeNode>& nodes) {
+  void close(std::int32_t node, const OctreeNodes& nodes) {
     Slot& s = slot(node);
     s.closed = true;
     for (std::int32_t c : nodes[static_cast<std::size_t>(node)].children) s.children += c >= 0;
@@ -511,17 +511,17 @@ LodTreeBuilder::LodTreeBuilder(LodTreeOptions options)
     : impl_(std::make_unique<Impl>(std::move(options))) {}
 LodTreeBuilder::~LodTreeBuilder() = default;
 
-Status LodTreeBuilder::add_leaf(std::int32_t node, const std::vector<OctreeNode>& nodes,
+Status LodTreeBuilder::add_leaf(std::int32_t node, const OctreeNodes& nodes,
                                 std::vector<std::byte>&& records) {
   return impl_->add_leaf(node, nodes, std::move(records), {});
 }
 
-Status LodTreeBuilder::add_streamed_leaf(std::int32_t node, const std::vector<OctreeNode>& nodes,
+Status LodTreeBuilder::add_streamed_leaf(std::int32_t node, const OctreeNodes& nodes,
                                          TempFile records) {
   return impl_->add_leaf(node, nodes, {}, std::move(records));
 }
 
-Status LodTreeBuilder::finish(const std::vector<OctreeNode>& nodes,
+Status LodTreeBuilder::finish(const OctreeNodes& nodes,
                               const std::function<void(std::uint64_t, std::uint64_t)>& progress) {
   return impl_->finish(nodes, progress);
 }

@@ -118,16 +118,16 @@ class LodTreeBuilder {
   // The octree stream's next leaf (OctreeBuilder's LeafFn, key order); `nodes` is the builder's
   // tree so far. Returns once the leaf is queued; while the queue holds more than queue_bytes,
   // the caller runs node work itself or waits. The first error of any node work ends the build.
-  Status add_leaf(std::int32_t node, const std::vector<OctreeNode>& nodes,
+  Status add_leaf(std::int32_t node, const OctreeNodes& nodes,
                   std::vector<std::byte>&& records);
   // The same for a leaf too large for memory (OctreeBuilder's MaxDepthLeafSpill): its soup
   // records ordered by triangle id in `records` (removed once built), its LODs built streaming
   // (streamed_leaf.h); it counts nothing against queue_bytes.
-  Status add_streamed_leaf(std::int32_t node, const std::vector<OctreeNode>& nodes,
+  Status add_streamed_leaf(std::int32_t node, const OctreeNodes& nodes,
                            TempFile records);
   // After OctreeBuilder::finish(): the remaining node work, on the caller and the workers.
   // `progress(done, total)` is called on the caller as nodes complete. The first error.
-  Status finish(const std::vector<OctreeNode>& nodes,
+  Status finish(const OctreeNodes& nodes,
                 const std::function<void(std::uint64_t, std::uint64_t)>& progress);
 
   // Every node's record (its bounds include its subtree's), by node index: complete after a

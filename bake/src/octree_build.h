@@ -23,6 +23,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <deque>
 #include <functional>
 #include <limits>
 #include <span>
@@ -44,6 +45,10 @@ struct OctreeNode {
   // "" for the root, else the octants from the root joined by '/': "3/5".
   std::string path() const;
 };
+
+// The tree's nodes by index. A deque: the nodes of a large tree (212K for 100M triangles, 64
+// bytes each) are never copied whole, nor held twice while a vector's doubling copies them.
+using OctreeNodes = std::deque<OctreeNode>;
 
 // Receives a finished leaf: its node index and its records in leaf order (ownership passes).
 using LeafFn = std::function<Status(std::int32_t node, std::vector<std::byte>&& records)>;
@@ -82,8 +87,8 @@ class OctreeBuilder {
   Status finish();
 
   // Parents precede their children; children in octant order (depth-first, key order).
-  const std::vector<OctreeNode>& nodes() const { return nodes_; }
-  std::vector<OctreeNode>& nodes() { return nodes_; }
+  const OctreeNodes& nodes() const { return nodes_; }
+  OctreeNodes& nodes() { return nodes_; }
 
  private:
   void open_candidate(std::uint64_t key);
@@ -106,7 +111,7 @@ class OctreeBuilder {
   std::size_t tie_offset_;
   LeafFn on_leaf_;
   MaxDepthLeafSpill spill_;  // spill_.triangles >= max_tris_ + 1
-  std::vector<OctreeNode> nodes_;
+  OctreeNodes nodes_;
   std::vector<std::int32_t> open_;  // split nodes on the current key's path, root first
   std::int32_t candidate_ = -1;     // the node whose records are being buffered
   std::vector<std::byte> buffer_;   // the candidate's records
