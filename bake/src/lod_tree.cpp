@@ -20,6 +20,7 @@
 
 #include "node_index.h"
 #include "node_lods_log.h"
+#include "octolod/bake/soup.h"
 #include "octolod/formats/node_file.h"
 #include "streamed_leaf.h"
 #include "temp_dir.h"
@@ -92,6 +93,7 @@ struct NodeDone {
   // LOD 0, which the parent merges when it fits its merge_bytes; empty for a streamed leaf,
   // whose LOD 0 the parent reads from its file
   NodeMesh finest;
+  bool streamed = false;  // an internal node built by run_streamed_internal
 };
 
 // A thread's reusable buffers.
@@ -100,6 +102,11 @@ struct Scratch {
 };
 
 Status interrupted() { return io_error("bake interrupted by a signal"); }
+
+// An internal node whose chosen children's LODs together exceed this many times merge_bytes is
+// built streaming (run_streamed_internal): its node work stays about that of a merge_bytes
+// input instead of growing with the model (in memory, ~600 bytes per merged triangle).
+constexpr std::size_t kStreamedMergeFactor = 2;
 
 }  // namespace
 
@@ -288,6 +295,7 @@ class LodTreeBuilder::Impl {
     if (!done.ok()) {
       if (error_.ok()) error_ = done.status();
     } else if (error_.ok()) {
+      stats_.streamed_internal_nodes += done->streamed;
       done->lods.bounds.extend(below);
       deliver(task.node, std::move(done).value());
     }
@@ -345,17 +353,23 @@ class LodTreeBuilder::Impl {
       if (c.present) chains.push_back(c.lods);
     const std::vector<std::size_t> chosen = choose_merged_lods(chains, options_.layout, merge_bytes_);
     double input_error = 0;
-    std::vector<const NodeMesh*> meshes;
+    std::size_t merged_bytes = 0;
     std::size_t next = 0;
     for (ChildLod& c : children) {
       if (!c.present) continue;
       const LodInfo& lod = c.lods[chosen[next++]];
-      if (!c.in_memory || &lod != &c.lods.front()) {
-        auto read = read_node_file(options_.root / lod.file);
-        if (!read.ok()) return read.status();
-        c.mesh = std::move(read).value();
-      }
       input_error = std::max(input_error, lod.error);
+      merged_bytes += lod_mesh_bytes(lod, options_.layout);
+    }
+    if (merged_bytes > kStreamedMergeFactor * merge_bytes_) {
+      auto streamed = run_streamed_internal(children, chosen, input_error, dir, cell);
+      if (!streamed.ok() || !streamed->lods.lods.empty()) return streamed;
+    }
+    std::vector<const NodeMesh*> meshes;
+    next = 0;
+    for (ChildLod& c : children) {
+      if (!c.present) continue;
+      OCTOLOD_RETURN_IF_ERROR(load_chosen(c, chosen[next++]));
       meshes.push_back(&c.mesh);
     }
     NodeMesh merged = merge_meshes(meshes);
@@ -365,6 +379,68 @@ class LodTreeBuilder::Impl {
     auto lods = build_lods(std::move(merged), input_error, cell, o);
     if (!lods.ok()) return lods.status();
     return write_lods(dir, lods.value());
+  }
+
+  // Child c's LOD `index` in c.mesh: its kept LOD 0 (left in place), else read from its file.
+  Status load_chosen(ChildLod& c, std::size_t index) const {
+    if (c.in_memory && index == 0) return {};
+    auto read = read_node_file(options_.root / c.lods[index].file);
+    if (!read.ok()) return read.status();
+    c.mesh = std::move(read).value();
+    return {};
+  }
+
+  // An internal node whose children's chosen LODs are too large to merge and simplify in memory
+  // (near the root of a large model, where every child's coarsest LOD keeps its locked boundary
+  // at the original resolution: 103K triangles for the root of a 100M rock): their triangles go
+  // to a record file, one child at a time, and the node's LODs are built streaming from it
+  // (streamed_leaf.h, merged_children). No LOD when even that cannot simplify them (the caller
+  // then merges in memory).
+  Result<NodeDone> run_streamed_internal(std::array<ChildLod, 8>& children,
+                                         const std::vector<std::size_t>& chosen, double input_error,
+                                         const std::string& dir, const Bounds& cell) {
+    TempFile records = make_temp_file(options_.work_dir, "merged-children");
+    const std::size_t record_bytes = soup_record_bytes(options_.layout);
+    {
+      auto writer = RecordWriter::create(records.path(), record_bytes, std::size_t{1} << 20);
+      if (!writer.ok()) return writer.status();
+      std::vector<std::byte> record(record_bytes);
+      std::uint32_t id = 0;  // octant order: the file is the same on any schedule
+      std::size_t next = 0;
+      for (ChildLod& c : children) {
+        if (!c.present) continue;
+        const std::size_t index = chosen[next++];
+        OCTOLOD_RETURN_IF_ERROR(load_chosen(c, index));
+        for (std::size_t t = 0; t < c.mesh.triangle_count(); ++t) {
+          store_soup_record(record.data(), options_.layout, c.mesh.vertices.data(), &c.mesh.indices[3 * t], id++);
+          OCTOLOD_RETURN_IF_ERROR(writer->append(record.data(), 1));
+        }
+        if (!(c.in_memory && index == 0)) c.mesh = {};  // a kept LOD 0 stays for the fallback
+      }
+      OCTOLOD_RETURN_IF_ERROR(writer->finish());
+    }
+    // LOD 1 at most the triangles of a merge_bytes mesh (about one vertex per triangle at these
+    // levels), read in chunks of that many: like the leaves' limits, but not from the budget,
+    // so the tree stays independent of it (merge_bytes, lod_tree.h)
+    const std::uint64_t limit = std::max<std::uint64_t>(
+        1, merge_bytes_ / (sizeof(float) * (options_.layout.floats() + 3)));
+    StreamedLeafOptions o;
+    o.layout = options_.layout;
+    o.cell = cell;
+    o.lod = options_.lod;
+    o.chunk_triangles = limit;
+    o.max_lod1_triangles = limit;
+    o.work_dir = options_.work_dir;
+    o.sort_budget_bytes = options_.streamed_sort_bytes;
+    o.merged_children = true;
+    o.input_error = input_error;
+    auto built = build_streamed_leaf(records.path(), options_.root, dir, o);
+    records.remove();
+    if (!built.ok()) return built.status();
+    if (built->coarser.empty()) return NodeDone{};
+    auto done = write_lods(dir, built->coarser);
+    if (done.ok()) done->streamed = true;
+    return done;
   }
 
   Status make_directory(const std::string& dir) const {

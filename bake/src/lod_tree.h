@@ -106,6 +106,9 @@ struct LodTreeStats {
   // parent that merges a coarser LOD always reads its file)
   std::uint64_t reread_lods = 0;
   std::uint64_t peak_kept_bytes = 0;
+  // internal nodes built streaming because their children's LODs were too large to merge in
+  // memory (lod_tree.cpp, run_streamed_internal)
+  std::uint64_t streamed_internal_nodes = 0;
 };
 
 class LodTreeBuilder {

@@ -624,16 +624,18 @@ Result<StreamedLeafLods> build_streamed_leaf(const fs::path& records, const fs::
   OCTOLOD_RETURN_IF_ERROR(builder.survey(edges.path()));
 
   StreamedLeafLods result;
-  const std::string file = lod_file_name(dir, 0);
-  auto bytes = builder.write_lod0(root / file);
-  if (!bytes.ok()) return bytes.status();
   const Survey& survey = builder.surveyed();
-  result.lod0.triangles = static_cast<std::uint32_t>(survey.triangles);
-  result.lod0.vertices = static_cast<std::uint32_t>(survey.vertices);
-  result.lod0.bytes = bytes.value();
-  result.lod0.file = file;
-  result.lod0_bounds = survey.bounds;
-  if (!options.build_lods) return result;
+  if (!options.merged_children) {
+    const std::string file = lod_file_name(dir, 0);
+    auto bytes = builder.write_lod0(root / file);
+    if (!bytes.ok()) return bytes.status();
+    result.lod0.triangles = static_cast<std::uint32_t>(survey.triangles);
+    result.lod0.vertices = static_cast<std::uint32_t>(survey.vertices);
+    result.lod0.bytes = bytes.value();
+    result.lod0.file = file;
+    result.lod0_bounds = survey.bounds;
+    if (!options.build_lods) return result;
+  }
 
   OCTOLOD_RETURN_IF_ERROR(builder.find_boundary_positions(edges.path(), sorted_edges.path()));
   const std::uint64_t limit = std::min<std::uint64_t>(options.max_lod1_triangles, survey.triangles / 2);
@@ -648,9 +650,9 @@ Result<StreamedLeafLods> build_streamed_leaf(const fs::path& records, const fs::
   if (!error.ok()) return error.status();
 
   LodOptions chain = options.lod;
-  chain.include_input = true;
-  chain.max_lods = std::max<std::uint32_t>(1, options.lod.max_lods - 1);
-  auto lods = build_lods(std::move(lod1).value(), error.value(), options.cell, chain);
+  chain.include_input = true;  // LOD 1 heads the chain
+  if (!options.merged_children) chain.max_lods = std::max<std::uint32_t>(1, options.lod.max_lods - 1);
+  auto lods = build_lods(std::move(lod1).value(), options.input_error + error.value(), options.cell, chain);
   if (!lods.ok()) return lods.status();
   result.coarser = std::move(lods).value();
   return result;

@@ -91,6 +91,12 @@ struct StreamedLeafOptions {
   std::uint64_t max_lod1_triangles = 1 << 14;
   std::filesystem::path work_dir;          // the edge sort's temporary files
   std::uint64_t sort_budget_bytes = 4 << 20;  // the edge sort's memory (external_sort.h)
+  // The records are an internal node's merged children (lod_tree.h: their LODs too large to
+  // simplify in memory), not a leaf's original triangles: no LOD 0 is written (lod0 stays
+  // empty), LOD 1 and its chain are the node's LODs, and every error adds input_error (the
+  // largest error of the merged LODs). build_lods must be true.
+  bool merged_children = false;
+  double input_error = 0.0;
 };
 
 struct StreamedLeafLods {
@@ -102,7 +108,9 @@ struct StreamedLeafLods {
 // Writes LOD 0 of the leaf whose soup records (ordered by triangle id) are in the file
 // `records` to root / dir / "lod0.olod" and returns it with the leaf's coarser LODs. No LOD 1
 // when even the coarsest grid keeps more than the triangle limit (the locked boundary
-// dominates). Errors: io naming the file; bad_input for a non-finite position.
+// dominates). With options.merged_children, no LOD 0: `coarser` holds the node's LODs, or
+// nothing when no LOD 1 could be built. Errors: io naming the file; bad_input for a non-finite
+// position.
 Result<StreamedLeafLods> build_streamed_leaf(const std::filesystem::path& records,
                                              const std::filesystem::path& root,
                                              const std::string& dir,
