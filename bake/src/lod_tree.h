@@ -10,6 +10,10 @@
 //             finest ones whose meshes fit LodTreeOptions::merge_bytes together, a leaf's
 //             original triangles when they do), in octant order, with input error = the max of
 //             those LODs' errors; build_lods from there. Bottom-up whatever the tree's balance.
+//             When the chosen LODs exceed twice merge_bytes (their locked boundaries near the
+//             root of a large model), they go to a record file and the node's LODs are built
+//             streaming from it instead (streamed_leaf.h, merged_children), memory bounded by
+//             merge_bytes rather than by the model.
 //
 // Why the finest LODs that fit: every node keeps its outer boundary at the original resolution
 // (crack-freedom for any cut, simplify.h), so a uniform cut through many small nodes spends most

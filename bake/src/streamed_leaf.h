@@ -30,6 +30,10 @@
 //          any partition of the input.
 //   LOD 2+ build_lods from LOD 1 and its error, in memory.
 //
+// The same path builds an internal node whose children's LODs are too large to merge in memory
+// (lod_tree.h; StreamedLeafOptions::merged_children): their triangles are its records, and it
+// gets no LOD 0 of its own.
+//
 // Memory: one chunk of records and its indexed mesh, the grid's occupied cells (about LOD 1's
 // vertices) and candidate triangles (at most 2 x the limit), the boundary's positions, LOD 1
 // and its chain, and the edge sort's budget. Not bounded: a leaf whose locked boundary alone
