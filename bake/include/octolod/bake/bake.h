@@ -34,7 +34,9 @@
 // usual in work (each thread may hold one); a leaf at max_depth too large for that
 // quarter (max_depth_leaf_triangles) is built streaming from a temporary file within it.
 // Outside the budget, per octree node: 72 bytes (the octree's node, the offset of its LOD
-// record, which waits in a work file until the manifest is written node by node from it).
+// record, which waits in a work file until the manifest is written node by node from it). An
+// internal node whose children's LODs are too large to merge in memory (near the root of a
+// large model) is clustered streaming from a file of them, like an oversize leaf.
 #pragma once
 
 #include <cstdint>
