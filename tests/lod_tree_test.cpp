@@ -486,7 +486,8 @@ TEST_F(LodTreeTest, InternalNodesTooLargeToMergeAreBuiltStreamingCrackFreeAndBou
   other.threads = 1;
   other.memory_budget_bytes = std::uint64_t{256} << 20;
   ASSERT_TRUE(bake(other).ok());
-  EXPECT_GT(expect_identical_trees(t, load_tree(other.output), "1 thread, 256M"), t.manifest.nodes.size());
+  // every node has a LOD (sanitized builds, max_tris 10: mostly one each)
+  EXPECT_GE(expect_identical_trees(t, load_tree(other.output), "1 thread, 256M"), t.manifest.nodes.size());
 }
 
 // --- streamed leaves ---
