@@ -102,6 +102,7 @@ def main():
     header = ["triangles", "method", "memory", "soup path", "soup s", "octree sort s",
               "octree stream s", "lods after stream s", "node work s", "total s", "wall s",
               "user s", "sys s", "written MiB", "M tri/s", "nodes", "LODs", "root coarsest tris", "sort runs", "LOD rereads",
+              "streamed internal nodes",
               "peak RSS MiB", "RSS - idle MiB", "RSS before manifest - idle MiB",
               "budget+24 MiB ok"]
     row(header)
@@ -126,7 +127,8 @@ def main():
                      "%.0f" % r["process_written_mib"],
                      "%.2f" % (r["triangles"] / s["total"] / 1e6), r["nodes"], r["lods"],
                      r["root_coarsest_triangles"], r["octree_sort_runs"],
-                     int(st.get("lod_rereads", 0)), "%.1f" % rss, "%.1f" % (rss - idle),
+                     int(st.get("lod_rereads", 0)), int(st.get("lod_streamed_internal_nodes", 0)),
+                     "%.1f" % rss, "%.1f" % (rss - idle),
                      "%.1f" % (r["peak_rss_bytes"] / 2.0 ** 20 - idle),
                      "yes" if rss - idle <= mib(memory) + 24 else "NO"])
                 sys.stdout.flush()
