@@ -646,7 +646,7 @@ Result<BakeReport> run_bake(const BakeOptions& options) {
     report.nodes = std::max<std::size_t>(octree->nodes.size(), 1);
     report.leaves = octree->nodes.empty() ? 1 : 0;
     for (const OctreeNode& n : octree->nodes) {
-      if (std::ranges::any_of(n.children, [](std::int32_t c) { return c >= 0; })) continue;
+      if (!n.leaf) continue;
       ++report.leaves;
       report.depth = std::max(report.depth, n.depth);
     }

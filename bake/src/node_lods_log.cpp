@@ -17,7 +17,8 @@ namespace {
 
 constexpr std::uint64_t kAbsent = ~std::uint64_t{0};
 
-// The record: a header, then one LodRecord per LOD, finest first.
+// The record: a header, then one LodRecord per LOD, finest first (neither has padding: the
+// file holds no uninitialized bytes).
 struct RecordHeader {
   std::uint32_t lods = 0;
   Bounds bounds;
@@ -28,6 +29,7 @@ struct LodRecord {
   double error = 0;
   std::uint64_t bytes = 0;
 };
+static_assert(sizeof(RecordHeader) == 4 + sizeof(Bounds) && sizeof(LodRecord) == 24);
 
 }  // namespace
 
@@ -71,17 +73,13 @@ Status NodeLodsLog::append(std::int32_t node, const NodeLods& lods) {
   const auto index = static_cast<std::size_t>(node);
   if (offsets_.size() <= index) offsets_.resize(index + 1, kAbsent);
   offsets_[index] = writer_->records_written();
-  std::vector<std::byte> record(sizeof(RecordHeader) + lods.lods.size() * sizeof(LodRecord));
-  RecordHeader header;
-  header.lods = static_cast<std::uint32_t>(lods.lods.size());
-  header.bounds = lods.bounds;
-  std::memcpy(record.data(), &header, sizeof header);
-  for (std::size_t i = 0; i < lods.lods.size(); ++i) {
-    const LodInfo& l = lods.lods[i];
+  const RecordHeader header{static_cast<std::uint32_t>(lods.lods.size()), lods.bounds};
+  OCTOLOD_RETURN_IF_ERROR(writer_->append(reinterpret_cast<const std::byte*>(&header), sizeof header));
+  for (const LodInfo& l : lods.lods) {
     const LodRecord r{l.triangles, l.vertices, l.error, l.bytes};
-    std::memcpy(record.data() + sizeof header + i * sizeof r, &r, sizeof r);
+    OCTOLOD_RETURN_IF_ERROR(writer_->append(reinterpret_cast<const std::byte*>(&r), sizeof r));
   }
-  return writer_->append(record.data(), record.size());
+  return {};
 }
 
 Status NodeLodsLog::finish() {
