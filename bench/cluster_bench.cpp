@@ -110,7 +110,7 @@ void run(samplegen::Shape shape, std::uint64_t triangles, int repeat) {
     const bake::Clustering clustering = bake::adaptive_grid_clustering(prepared, target);
     search_best = std::min(search_best, seconds_since(start));
     start = Clock::now();
-    const bake::ClusteredMesh clustered = bake::build_clustered_mesh(prepared.mesh, clustering, prepared.origin);
+    const bake::ClusteredMesh clustered = bake::build_clustered_mesh(prepared.mesh, prepared.face_normal, clustering, prepared.origin);
     cluster_best = std::min(cluster_best, seconds_since(start));
     step_triangles = clustered.mesh.triangle_count();
     start = Clock::now();

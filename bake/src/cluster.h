@@ -7,6 +7,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <vector>
 
 #include "boundary_edges.h"
 #include "wedges.h"
@@ -21,6 +22,10 @@ struct PreparedNode {
   Boundary boundary;
   Bounds cell;                    // the node's octree cell, model units
   Bounds mesh_bounds;             // tight bounds of mesh
+  // triangle_normal of every triangle of mesh (twice its area), and the mesh's area: the
+  // resolution search, the halving order and the clustered mesh all need them
+  std::vector<std::array<double, 3>> face_normal;
+  double area = 0.0;
   std::array<double, 3> origin;   // cell centre: the local origin of the quadric arithmetic
 };
 

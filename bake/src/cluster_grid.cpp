@@ -131,20 +131,6 @@ std::pair<std::vector<std::uint32_t>, std::vector<std::uint64_t>> dense_ids(
   return {std::move(ids), std::move(sorted)};
 }
 
-double surface_area(const NodeMesh& mesh) {
-  const std::size_t stride = mesh.layout.floats();
-  double area = 0.0;
-  for (std::size_t t = 0; t < mesh.triangle_count(); ++t) {
-    const float* p[3];
-    for (std::size_t k = 0; k < 3; ++k) p[k] = &mesh.vertices[mesh.indices[3 * t + k] * stride];
-    const double e1[3] = {double(p[1][0]) - p[0][0], double(p[1][1]) - p[0][1], double(p[1][2]) - p[0][2]};
-    const double e2[3] = {double(p[2][0]) - p[0][0], double(p[2][1]) - p[0][1], double(p[2][2]) - p[0][2]};
-    const double nx = e1[1] * e2[2] - e1[2] * e2[1], ny = e1[2] * e2[0] - e1[0] * e2[2], nz = e1[0] * e2[1] - e1[1] * e2[0];
-    area += 0.5 * std::sqrt(nx * nx + ny * ny + nz * nz);
-  }
-  return area;
-}
-
 // An upper bound of count_grid_triangles(node, 1) without clustering: at g = 1 every unlocked
 // vertex is in the one cell, so a surviving triangle has at least two locked corners.
 std::size_t coarsest_count_bound(const PreparedNode& node) {
@@ -207,7 +193,7 @@ std::vector<std::uint32_t> clusters_by_error(const PreparedNode& node, const std
   for (std::size_t v = 0; v < cluster.size(); ++v) unlocked[v] = (distinct[cluster[v]] & kLockedKey) == 0;
   constexpr std::size_t q3 = quadric_doubles(3);
   std::vector<double> quadric(count * q3, 0.0), area(count, 0.0), sum(count * 3, 0.0);
-  add_plane_quadrics(node.mesh, face_normals(node.mesh), cluster, unlocked, node.origin, quadric.data(), area.data());
+  add_plane_quadrics(node.mesh, node.face_normal, cluster, unlocked, node.origin, quadric.data(), area.data());
   std::vector<std::uint32_t> members(count, 0);
   for (std::uint32_t v = 0; v < cluster.size(); ++v) {
     if (!unlocked[v]) continue;
@@ -277,7 +263,7 @@ GridChoice search_grid_resolution(const PreparedNode& node, std::size_t target) 
   const double side = std::max({static_cast<double>(domain.max[0]) - domain.min[0],
                                 static_cast<double>(domain.max[1]) - domain.min[1],
                                 static_cast<double>(domain.max[2]) - domain.min[2]});
-  const double area = surface_area(node.mesh);
+  const double area = node.area;
   double guess = area > 0.0 ? side * std::sqrt(static_cast<double>(target) / (3.0 * area)) : 8.0;
   std::uint32_t lo = 1, hi = kMaxResolution + 1;
   std::uint32_t g = static_cast<std::uint32_t>(std::clamp(guess, 2.0, static_cast<double>(kMaxResolution)));
@@ -317,7 +303,7 @@ Clustering uniform_clustering(const PreparedNode& node, std::uint32_t g) {
 }  // namespace
 
 ClusteredMesh cluster_grid(const PreparedNode& node, std::uint32_t g) {
-  return build_clustered_mesh(node.mesh, uniform_clustering(node, g), node.origin);
+  return build_clustered_mesh(node.mesh, node.face_normal, uniform_clustering(node, g), node.origin);
 }
 
 Clustering adaptive_grid_clustering(const PreparedNode& node, std::size_t target) {

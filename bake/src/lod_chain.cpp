@@ -38,26 +38,27 @@ Result<std::vector<Lod>> build_lods(NodeMesh input, double input_error, const Bo
   if (options.max_lods == 0) return usage_error("build_lods: max_lods must be at least 1");
   std::vector<Lod> lods;
   double error = input_error;
-  NodeMesh current = std::move(input);
-  if (options.include_input) lods.push_back({current, error});
+  if (options.include_input) lods.push_back({std::move(input), error});
+  // each step simplifies the last LOD (the input before the first)
+  auto current = [&]() -> const NodeMesh& { return lods.empty() ? input : lods.back().mesh; };
 
-  while (lods.size() < options.max_lods && current.triangle_count() > options.min_triangles) {
-    const std::size_t previous = current.triangle_count();
+  while (lods.size() < options.max_lods && current().triangle_count() > options.min_triangles) {
+    const std::size_t previous = current().triangle_count();
     const auto target = static_cast<std::size_t>(std::floor(static_cast<double>(previous) * options.reduction));
     // an internal node's first step only has to shrink its input (which is no LOD of its own)
     const std::size_t accept = lods.empty() ? previous - 1 : target;
     SimplifyOptions step;
     step.method = options.method;
     step.target_triangles = static_cast<std::uint32_t>(std::max<std::size_t>(target, 1));
-    Result<SimplifyResult> simplified = simplify_node(current, cell, step);
+    Result<SimplifyResult> simplified = simplify_node(current(), cell, step);
     if (!simplified.ok()) return simplified.status();
     const std::size_t count = simplified->mesh.triangle_count();
     if (count == 0 || count > accept) break;  // the locked boundary dominates
     error += simplified->error_bound;
-    current = std::move(simplified->mesh);
-    lods.push_back({current, error});
+    lods.push_back({std::move(simplified->mesh), error});
+    if (lods.size() == 1) input = {};  // an internal node's merged input is no LOD of its own
   }
-  if (lods.empty()) lods.push_back({std::move(current), error});
+  if (lods.empty()) lods.push_back({std::move(input), error});
   return lods;
 }
 

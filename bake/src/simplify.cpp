@@ -42,6 +42,8 @@ PreparedNode prepare_node(const NodeMesh& mesh, const Bounds& cell) {
   node.boundary = find_boundary(node.mesh, node.positions);
   node.cell = cell;
   node.mesh_bounds = node.mesh.bounds();
+  node.face_normal = face_normals(node.mesh);
+  node.area = surface_area(node.face_normal);
   for (std::size_t i = 0; i < 3; ++i)
     node.origin[i] = 0.5 * (static_cast<double>(cell.min[i]) + static_cast<double>(cell.max[i]));
   return node;
@@ -63,7 +65,7 @@ Result<SimplifyResult> simplify_node(const NodeMesh& input, const Bounds& cell,
   } else {
     ClusteredMesh clustered =
         options.target_triangles > 0
-            ? build_clustered_mesh(node.mesh, adaptive_grid_clustering(node, options.target_triangles), node.origin)
+            ? build_clustered_mesh(node.mesh, node.face_normal, adaptive_grid_clustering(node, options.target_triangles), node.origin)
             : cluster_grid(node, options.grid_resolution);
     result.mesh = std::move(clustered.mesh);
     result.error_bound = hausdorff_upper_bound(node.mesh, result.mesh, clustered.hints());

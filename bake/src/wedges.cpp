@@ -139,6 +139,12 @@ std::vector<std::array<double, 3>> face_normals(const NodeMesh& mesh) {
   return normals;
 }
 
+double surface_area(std::span<const std::array<double, 3>> face_normal) {
+  double area = 0.0;
+  for (const std::array<double, 3>& n : face_normal) area += 0.5 * std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+  return area;
+}
+
 bool orient_kept_triangle(const std::array<const float*, 3>& record, bool even,
                           const std::array<double, 3>& source_normal, std::array<std::uint32_t, 3>& corner) {
   if (std::memcmp(record[0], record[1], 12) == 0 || std::memcmp(record[1], record[2], 12) == 0 ||
@@ -201,8 +207,8 @@ void place_representative(const double* quadric, const double* mean, const Clamp
   if (best_vertex[3] < evaluate_quadric(3, quadric, x)) std::copy(best_vertex, best_vertex + 3, x);
 }
 
-ClusteredMesh build_clustered_mesh(const NodeMesh& mesh, const Clustering& clustering,
-                                   const std::array<double, 3>& origin) {
+ClusteredMesh build_clustered_mesh(const NodeMesh& mesh, std::span<const std::array<double, 3>> face_normal,
+                                   const Clustering& clustering, const std::array<double, 3>& origin) {
   const VertexLayout layout = mesh.layout;
   const int n = static_cast<int>(layout.floats());
   const int attribute_count = n - 3;
@@ -243,13 +249,11 @@ ClusteredMesh build_clustered_mesh(const NodeMesh& mesh, const Clustering& clust
     for (int i = 3; i < n; ++i) out[i] = f[i];
   };
 
-  // face normals (x2 area), and the scale of positions in the generalized quadrics: 1 / typical
-  // edge length, so a triangle spans about one unit in position. Garland & Heckbert scale the
-  // model into the unit cube for the same reason: with tiny triangles the attribute directions
-  // dominate the plane in R^n and the attribute systems become nearly singular.
-  const std::vector<std::array<double, 3>> face_normal = face_normals(mesh);
-  double total_area = 0.0;
-  for (const std::array<double, 3>& fn : face_normal) total_area += 0.5 * std::sqrt(fn[0] * fn[0] + fn[1] * fn[1] + fn[2] * fn[2]);
+  // the scale of positions in the generalized quadrics: 1 / typical edge length, so a triangle
+  // spans about one unit in position. Garland & Heckbert scale the model into the unit cube for
+  // the same reason: with tiny triangles the attribute directions dominate the plane in R^n and
+  // the attribute systems become nearly singular.
+  const double total_area = surface_area(face_normal);
   const double position_scale =
       total_area > 0.0 ? std::sqrt(static_cast<double>(triangle_count) / (2.0 * total_area)) : 1.0;
 

@@ -78,8 +78,9 @@ struct ClusteredMesh {
 
   ImageHints hints() const { return {nearby_output_triangle, vertex_cluster, fan_offset, fan_triangle}; }
 };
-ClusteredMesh build_clustered_mesh(const NodeMesh& mesh, const Clustering& clustering,
-                                   const std::array<double, 3>& origin);
+// `face_normal`: face_normals(mesh).
+ClusteredMesh build_clustered_mesh(const NodeMesh& mesh, std::span<const std::array<double, 3>> face_normal,
+                                   const Clustering& clustering, const std::array<double, 3>& origin);
 
 // The cross product of the edges from p0 of the triangle (p0, p1, p2), each the position (first
 // three floats, model units) of a vertex record, in double: its normal times twice its area.
@@ -87,6 +88,9 @@ std::array<double, 3> triangle_normal(const float* p0, const float* p1, const fl
 
 // triangle_normal of every triangle of `mesh`.
 std::vector<std::array<double, 3>> face_normals(const NodeMesh& mesh);
+
+// The area of the triangles whose face_normals these are.
+double surface_area(std::span<const std::array<double, 3>> face_normal);
 
 // The mod-2 output rule's orientation (build_clustered_mesh): a source triangle whose corners
 // fall in the distinct clusters (c0, c1, c2) winds like their sorted triple iff (c0, c1, c2)
