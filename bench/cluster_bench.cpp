@@ -110,15 +110,15 @@ void run(samplegen::Shape shape, std::uint64_t triangles, int repeat) {
     const bake::Clustering clustering = bake::adaptive_grid_clustering(prepared, target);
     search_best = std::min(search_best, seconds_since(start));
     start = Clock::now();
-    const bake::ClusteredMesh clustered = bake::build_clustered_mesh(prepared.mesh, prepared.face_normal, clustering, prepared.origin);
+    const bake::ClusteredMesh clustered = bake::build_clustered_mesh(prepared.mesh(), prepared.face_normal, clustering, prepared.origin);
     cluster_best = std::min(cluster_best, seconds_since(start));
     step_triangles = clustered.mesh.triangle_count();
     start = Clock::now();
-    const double bound = bake::hausdorff_upper_bound(prepared.mesh, clustered.mesh, clustered.hints());
+    const double bound = bake::hausdorff_upper_bound(prepared.mesh(), clustered.mesh, clustered.hints());
     bound_best = std::min(bound_best, seconds_since(start));
     if (r == 0) {
       start = Clock::now();
-      const double bvh_bound = bake::hausdorff_upper_bound(prepared.mesh, clustered.mesh);
+      const double bvh_bound = bake::hausdorff_upper_bound(prepared.mesh(), clustered.mesh);
       bvh_best = std::min(bvh_best, seconds_since(start));
       std::printf("      step bound %.6f (hinted) vs %.6f (BVH queries)\n", bound, bvh_bound);
     }

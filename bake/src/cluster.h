@@ -7,6 +7,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <optional>
 #include <vector>
 
 #include "boundary_edges.h"
@@ -17,7 +18,12 @@
 namespace octolod::bake {
 
 struct PreparedNode {
-  NodeMesh mesh;                  // the input with identical vertex records welded
+  // The input with identical vertex records welded: the input itself (not copied) when it has
+  // none, which is the rule (a merged input is welded already, a clustering's wedges nearly
+  // always differ).
+  const NodeMesh& mesh() const { return welded ? *welded : *input; }
+  const NodeMesh* input = nullptr;  // not owned: outlives the PreparedNode
+  std::optional<NodeMesh> welded;
   PositionIds positions;
   Boundary boundary;
   Bounds cell;                    // the node's octree cell, model units
@@ -73,7 +79,8 @@ class GridCellKeys {
   double inverse_size_;
 };
 
-// `mesh` must be valid (indices in range, finite positions); checked by simplify_node.
+// `mesh` must be valid (indices in range, finite positions; checked by simplify_node) and
+// outlive the result, which refers to it.
 PreparedNode prepare_node(const NodeMesh& mesh, const Bounds& cell);
 
 // The next resolution of a search for the finest grid whose triangle count (the last one,

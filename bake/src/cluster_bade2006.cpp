@@ -17,7 +17,7 @@
 namespace octolod::bake {
 
 NodeMesh cluster_bade2006(const PreparedNode& node) {
-  const NodeMesh& mesh = node.mesh;
+  const NodeMesh& mesh = node.mesh();
   const VertexLayout layout = mesh.layout;
   const int n = static_cast<int>(layout.floats());
   const std::size_t stride = layout.floats();

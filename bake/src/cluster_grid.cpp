@@ -92,13 +92,13 @@ GridDomain halved(const GridDomain& coarse) {
 
 // Cluster key of every vertex: the linear cell index, or kLockedKey | position id.
 std::vector<std::uint64_t> vertex_keys(const PreparedNode& node, const GridDomain& grid) {
-  const std::size_t stride = node.mesh.layout.floats();
+  const std::size_t stride = node.mesh().layout.floats();
   const GridCellKeys cell_keys(grid, node.origin);
-  std::vector<std::uint64_t> keys(node.mesh.vertex_count());
+  std::vector<std::uint64_t> keys(node.mesh().vertex_count());
   for (std::size_t v = 0; v < keys.size(); ++v) {
     const std::uint32_t position = node.positions.of_vertex[v];
     keys[v] = node.boundary.locked_position[position] ? kLockedKey | position
-                                                      : cell_keys.key(&node.mesh.vertices[v * stride]);
+                                                      : cell_keys.key(&node.mesh().vertices[v * stride]);
   }
   return keys;
 }
@@ -137,8 +137,8 @@ std::size_t coarsest_count_bound(const PreparedNode& node) {
   const std::vector<std::uint8_t>& locked = node.boundary.locked_position;
   const std::vector<std::uint32_t>& position = node.positions.of_vertex;
   std::size_t count = 0;
-  for (std::size_t t = 0; t < node.mesh.triangle_count(); ++t) {
-    const std::uint32_t* corner = &node.mesh.indices[3 * t];
+  for (std::size_t t = 0; t < node.mesh().triangle_count(); ++t) {
+    const std::uint32_t* corner = &node.mesh().indices[3 * t];
     count += locked[position[corner[0]]] + locked[position[corner[1]]] + locked[position[corner[2]]] >= 2;
   }
   return count;
@@ -148,9 +148,9 @@ std::size_t coarsest_count_bound(const PreparedNode& node) {
 // triangles whose corners coincide after rounding): build_clustered_mesh's rule per cluster
 // triple (KeptTriangleCounter), without solving any quadric.
 std::size_t count_kept_triangles(const PreparedNode& node, const std::vector<std::uint32_t>& cluster) {
-  KeptTriangleCounter<3> counter(node.mesh.triangle_count());
-  for (std::size_t t = 0; t < node.mesh.triangle_count(); ++t) {
-    const std::uint32_t* corner = &node.mesh.indices[3 * t];
+  KeptTriangleCounter<3> counter(node.mesh().triangle_count());
+  for (std::size_t t = 0; t < node.mesh().triangle_count(); ++t) {
+    const std::uint32_t* corner = &node.mesh().indices[3 * t];
     const std::uint32_t c0 = cluster[corner[0]], c1 = cluster[corner[1]], c2 = cluster[corner[2]];
     if (c0 == c1 || c1 == c2 || c0 == c2) continue;
     std::array<std::uint32_t, 3> triple{c0, c1, c2};
@@ -187,18 +187,18 @@ Clustering clustering_from_keys(const std::vector<std::uint64_t>& keys, const Gr
 // errors in key order.
 std::vector<std::uint32_t> clusters_by_error(const PreparedNode& node, const std::vector<std::uint32_t>& cluster,
                                              const std::vector<std::uint64_t>& distinct) {
-  const std::size_t stride = node.mesh.layout.floats();
+  const std::size_t stride = node.mesh().layout.floats();
   const std::size_t count = distinct.size();
   std::vector<std::uint8_t> unlocked(cluster.size());
   for (std::size_t v = 0; v < cluster.size(); ++v) unlocked[v] = (distinct[cluster[v]] & kLockedKey) == 0;
   constexpr std::size_t q3 = quadric_doubles(3);
   std::vector<double> quadric(count * q3, 0.0), area(count, 0.0), sum(count * 3, 0.0);
-  add_plane_quadrics(node.mesh, node.face_normal, cluster, unlocked, node.origin, quadric.data(), area.data());
+  add_plane_quadrics(node.mesh(), node.face_normal, cluster, unlocked, node.origin, quadric.data(), area.data());
   std::vector<std::uint32_t> members(count, 0);
   for (std::uint32_t v = 0; v < cluster.size(); ++v) {
     if (!unlocked[v]) continue;
     for (std::size_t i = 0; i < 3; ++i)
-      sum[cluster[v] * 3 + i] += static_cast<double>(node.mesh.vertices[v * stride + i]) - node.origin[i];
+      sum[cluster[v] * 3 + i] += static_cast<double>(node.mesh().vertices[v * stride + i]) - node.origin[i];
     ++members[cluster[v]];
   }
   std::vector<std::pair<double, std::uint32_t>> ranked;  // (-error per area, cluster)
@@ -277,7 +277,7 @@ GridChoice search_grid_resolution(const PreparedNode& node, std::size_t target) 
     if (count <= target) lo = g;
     else hi = g;
     if (count <= target && count > best_count) best = g, best_count = count;
-    if (count <= target && (count >= node.mesh.triangle_count() || static_cast<double>(count) >= 0.85 * static_cast<double>(target)))
+    if (count <= target && (count >= node.mesh().triangle_count() || static_cast<double>(count) >= 0.85 * static_cast<double>(target)))
       break;  // close enough, or nothing left to merge
     g = next_search_resolution(g, count, target, lo, hi);
   }
@@ -303,7 +303,7 @@ Clustering uniform_clustering(const PreparedNode& node, std::uint32_t g) {
 }  // namespace
 
 ClusteredMesh cluster_grid(const PreparedNode& node, std::uint32_t g) {
-  return build_clustered_mesh(node.mesh, node.face_normal, uniform_clustering(node, g), node.origin);
+  return build_clustered_mesh(node.mesh(), node.face_normal, uniform_clustering(node, g), node.origin);
 }
 
 Clustering adaptive_grid_clustering(const PreparedNode& node, std::size_t target) {

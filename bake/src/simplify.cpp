@@ -37,12 +37,13 @@ Status check_mesh(const NodeMesh& mesh) {
 
 PreparedNode prepare_node(const NodeMesh& mesh, const Bounds& cell) {
   PreparedNode node;
-  node.mesh = weld_identical_vertices(mesh);
-  node.positions = make_position_ids(node.mesh);
-  node.boundary = find_boundary(node.mesh, node.positions);
+  node.input = &mesh;
+  node.welded = weld_if_needed(mesh);
+  node.positions = make_position_ids(node.mesh());
+  node.boundary = find_boundary(node.mesh(), node.positions);
   node.cell = cell;
-  node.mesh_bounds = node.mesh.bounds();
-  node.face_normal = face_normals(node.mesh);
+  node.mesh_bounds = node.mesh().bounds();
+  node.face_normal = face_normals(node.mesh());
   node.area = surface_area(node.face_normal);
   for (std::size_t i = 0; i < 3; ++i)
     node.origin[i] = 0.5 * (static_cast<double>(cell.min[i]) + static_cast<double>(cell.max[i]));
@@ -65,13 +66,13 @@ Result<SimplifyResult> simplify_node(const NodeMesh& input, const Bounds& cell,
   } else {
     ClusteredMesh clustered =
         options.target_triangles > 0
-            ? build_clustered_mesh(node.mesh, node.face_normal, adaptive_grid_clustering(node, options.target_triangles), node.origin)
+            ? build_clustered_mesh(node.mesh(), node.face_normal, adaptive_grid_clustering(node, options.target_triangles), node.origin)
             : cluster_grid(node, options.grid_resolution);
     result.mesh = std::move(clustered.mesh);
-    result.error_bound = hausdorff_upper_bound(node.mesh, result.mesh, clustered.hints());
+    result.error_bound = hausdorff_upper_bound(node.mesh(), result.mesh, clustered.hints());
     return result;
   }
-  result.error_bound = hausdorff_upper_bound(node.mesh, result.mesh);
+  result.error_bound = hausdorff_upper_bound(node.mesh(), result.mesh);
   return result;
 }
 

@@ -92,13 +92,10 @@ void pull_into_box(const double* inside, const ClampBox& box, double* x) {
 
 }  // namespace
 
-NodeMesh weld_identical_vertices(const NodeMesh& mesh) {
+std::optional<NodeMesh> weld_if_needed(const NodeMesh& mesh) {
   const std::size_t stride = mesh.layout.floats();
   const std::size_t vertex_count = mesh.vertex_count();
   const float* base = mesh.vertices.data();
-  NodeMesh out;
-  out.layout = mesh.layout;
-  out.vertices.reserve(mesh.vertices.size());
   std::vector<std::uint32_t> remap(vertex_count);
   FlatIdSet table(vertex_count);
   auto hash = [base, stride](std::uint32_t v) {
@@ -112,16 +109,22 @@ NodeMesh weld_identical_vertices(const NodeMesh& mesh) {
   std::uint32_t next = 0;
   for (std::uint32_t v = 0; v < vertex_count; ++v) {
     const std::uint32_t first = table.find_or_insert(v, hash, equal);
-    if (first == v) {
-      out.vertices.insert(out.vertices.end(), base + v * stride, base + (v + 1) * stride);
-      remap[v] = next++;
-    } else {
-      remap[v] = remap[first];
-    }
+    remap[v] = first == v ? next++ : remap[first];
   }
+  if (next == vertex_count) return std::nullopt;
+  NodeMesh out;
+  out.layout = mesh.layout;
+  out.vertices.reserve(std::size_t{next} * stride);
+  for (std::uint32_t v = 0; v < vertex_count; ++v)
+    if (remap[v] == out.vertex_count()) out.vertices.insert(out.vertices.end(), base + v * stride, base + (v + 1) * stride);
   out.indices.resize(mesh.indices.size());
   for (std::size_t i = 0; i < mesh.indices.size(); ++i) out.indices[i] = remap[mesh.indices[i]];
   return out;
+}
+
+NodeMesh weld_identical_vertices(const NodeMesh& mesh) {
+  std::optional<NodeMesh> welded = weld_if_needed(mesh);
+  return welded ? std::move(*welded) : mesh;
 }
 
 std::array<double, 3> triangle_normal(const float* p0, const float* p1, const float* p2) {

@@ -11,6 +11,7 @@
 
 #include <array>
 #include <cstdint>
+#include <optional>
 #include <span>
 #include <vector>
 
@@ -23,6 +24,9 @@ namespace octolod::bake {
 // Welds vertices whose records (all floats) have identical bits; the first occurrence keeps its
 // relative order, indices are remapped. Identical records are one wedge of one vertex.
 NodeMesh weld_identical_vertices(const NodeMesh& mesh);
+// The same, or nothing when no two records are identical (the mesh is its own welded form):
+// what the simplifier uses to avoid a copy of its input in the common case.
+std::optional<NodeMesh> weld_if_needed(const NodeMesh& mesh);
 
 struct ClampBox {
   std::array<double, 3> min;
