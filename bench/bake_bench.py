@@ -14,7 +14,7 @@ depths 5 and 8 (octree only by default, --table-method grid for the full bake).
 Also user and system CPU seconds and the MiB the process wrote (the kernel's count).
 
   bench/bake_bench.py --cli build/cli/octolod [--work /tmp/bake-bench] [--sizes 1M,10M]
-                      [--memory 16M,64M,256M] [--threads 2] [--methods grid,none]
+                      [--memory 48M,64M,256M] [--threads 2] [--methods grid,none]
                       [--table-size 1M] [--table-method none] [--no-table] [--markdown]
 --markdown prints the tables as Markdown (for docs/benchmarks.md).
 """
@@ -70,7 +70,7 @@ def main():
     ap.add_argument("--cli", required=True)
     ap.add_argument("--work", default="/tmp/bake-bench")
     ap.add_argument("--sizes", default="1M,10M")
-    ap.add_argument("--memory", default="16M,64M,256M")
+    ap.add_argument("--memory", default="48M,64M,256M")
     ap.add_argument("--threads", type=int, default=2)
     ap.add_argument("--methods", default="grid,none")
     ap.add_argument("--table-size", default="1M")

@@ -70,7 +70,7 @@ class BakeTest : public ::testing::Test {
     o.output = path(out);
     o.max_tris = 1000;
     o.max_depth = 8;
-    o.memory_budget_bytes = 16 << 20;
+    o.memory_budget_bytes = 24 << 20;  // max_tris 1000 needs 19 MiB
     o.work_dir = work();
     o.threads = 2;
     return o;
@@ -403,12 +403,13 @@ TEST_F(BakeTest, OneAndTwoThreadsWriteIdenticalTrees) {
 
 TEST_F(BakeTest, TinyBudgetOutOfCoreGivesTheSameTreeAsALargeBudget) {
   BakeOptions small = options("small");
+  // leaves small enough for a 2 MiB budget's node work (lod_tree.h, max_node_work_bytes)
   small.memory_budget_bytes = 2 << 20;
   small.force_out_of_core = true;
-  small.max_tris = 500;
+  small.max_tris = 60;
   BakeOptions large = options("large");
   large.memory_budget_bytes = 256 << 20;
-  large.max_tris = 500;
+  large.max_tris = 60;
   // In core without the in-memory octree: the soup's records sorted by cell.
   BakeOptions records = large;
   records.output = path("records");
@@ -454,6 +455,7 @@ TEST_F(BakeTest, ASecondBakeReplacesTheFirstAtomically) {
   ASSERT_TRUE(bake(options("out")).ok());
   BakeOptions again = options("out");
   again.max_tris = 3000;
+  again.memory_budget_bytes = 64 << 20;  // larger leaves, larger node work
   auto r = bake(again);
   ASSERT_TRUE(r.ok()) << r.status().message();
   auto m = read_manifest(path("out") / "manifest.json");
@@ -501,6 +503,7 @@ TEST_F(BakeTest, OutOfSpaceAnywhereLeavesThePreviousTreeAndNoTemporaryFile) {
   BakeOptions o = options("out");
   o.force_out_of_core = true;
   o.memory_budget_bytes = 4 << 20;
+  o.max_tris = 150;  // node work that fits 4 MiB
   std::vector<std::string> messages;
   expect_out_of_space_anywhere_fails_cleanly(o, messages);
 }
@@ -604,7 +607,7 @@ void wait_for_temp_dir(const fs::path& dir, pid_t pid) {
 }
 
 std::vector<std::string> bake_args(const fs::path& in, const fs::path& out, const fs::path& work) {
-  return {"bake", in.string(), "-o", out.string(), "--work-dir", work.string(), "--memory", "4M",
+  return {"bake", in.string(), "-o", out.string(), "--work-dir", work.string(), "--memory", "24M",
           "--max-tris", "500", "--threads", "2"};
 }
 
@@ -674,8 +677,9 @@ TEST_F(BakeTest, CliExitCodesForWriteFailureBadInputAndUnwritableOutput) {
   EXPECT_EQ(WEXITSTATUS(status), 4);
 }
 
-// The 60K rock in one root leaf, far over the cap of --memory 4M: built streaming (exit 0), a
-// root whose LOD 1 fits the in-memory cap, no temporary file left.
+// The 60K rock in one root leaf, far over the cap of --memory 24M (the bake's 16 MiB after the
+// program's share): built streaming (exit 0), a root whose LOD 1 fits the in-memory cap, no
+// temporary file left.
 TEST_F(BakeTest, CliBakesALeafAtMaxDepthOverTheCapStreaming) {
   ASSERT_NE(cli_path(), nullptr);
   std::vector<std::string> args = bake_args(small_ply(), path("out"), work());
@@ -688,7 +692,8 @@ TEST_F(BakeTest, CliBakesALeafAtMaxDepthOverTheCapStreaming) {
   ASSERT_EQ(m->nodes.size(), 1u);
   EXPECT_EQ(m->nodes[0].lods[0].triangles, m->input_triangles);
   ASSERT_GE(m->nodes[0].lods.size(), 2u);
-  EXPECT_LE(m->nodes[0].lods[1].triangles, 501u);  // --max-tris 500 + 1: over 4M's cap
+  EXPECT_LE(m->nodes[0].lods[1].triangles,
+            max_depth_leaf_triangles((std::uint64_t{24} << 20) - kCliProgramBytes, m->layout, 500));
   expect_no_temp_files();
 }
 

@@ -101,7 +101,7 @@ class LodTreeTest : public ::testing::Test {
     o.output = root_ / name;
     o.max_tris = static_cast<std::uint32_t>(1000 / kScale);
     o.max_depth = 8;
-    o.memory_budget_bytes = 16 << 20;
+    o.memory_budget_bytes = 24 << 20;  // max_tris 1000 needs 19 MiB
     o.work_dir = root_ / "work";
     o.threads = 2;
     return o;
@@ -443,6 +443,7 @@ ErrorCheck expect_stored_errors_bound(const LoadedTree& t) {
 TEST_F(LodTreeTest, StoredErrorsBoundTheDistanceFromTheOriginalTriangles) {
   BakeOptions o = options(big_rock_ply(), "bounds");
   o.max_tris = static_cast<std::uint32_t>(2000 / kScale);
+  o.memory_budget_bytes = 48 << 20;  // max_tris 2000 needs 35 MiB
   const LoadedTree t = bake_and_load(o);
   const Manifest& m = t.manifest;
   ASSERT_FALSE(m.nodes.empty());
@@ -558,7 +559,10 @@ TEST_F(LodTreeTest, LeavesOverTheCapAreStreamedWithinItAndStayCrackFreeAndBounde
   for (const std::uint32_t depth : depths) {
     BakeOptions o = options(streamed_rock_ply(root_), "streamed-" + std::to_string(depth));
     o.max_depth = depth;
-    o.memory_budget_bytes = (6 << 20) / kScale;  // every leaf over the cap (max_tris + 1 in Debug)
+    // every leaf over the cap (1083 triangles; 216 sanitized): a small budget, and leaves
+    // small enough for its node work
+    o.max_tris = static_cast<std::uint32_t>(300 / kScale);
+    o.memory_budget_bytes = (9 << 20) / kScale;
     const LoadedTree t = bake_and_load(o);
     BakeOptions in_memory = o;  // for its leaves' LOD 0
     in_memory.output = root_ / ("in-memory-" + std::to_string(depth));
@@ -611,7 +615,8 @@ TEST_F(LodTreeTest, LeavesOverTheCapAreStreamedWithinItAndStayCrackFreeAndBounde
 TEST_F(LodTreeTest, StreamedLeavesAreTheSameForAnyThreadCountAndOctreePath) {
   BakeOptions one = options(streamed_rock_ply(root_), "streamed-one");
   one.max_depth = 1;
-  one.memory_budget_bytes = (6 << 20) / kScale;
+  one.max_tris = static_cast<std::uint32_t>(300 / kScale);
+  one.memory_budget_bytes = (9 << 20) / kScale;
   one.threads = 1;
   BakeOptions two = one;
   two.output = root_ / "streamed-two";

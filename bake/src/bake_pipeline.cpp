@@ -19,6 +19,7 @@
 #include "morton.h"
 #include "octolod/bake/external_sort.h"
 #include "octolod/bake/soup.h"
+#include "octolod/formats/ply_reader.h"
 #include "lod_tree.h"
 #include "node_lods_log.h"
 #include "octolod/formats/node_file.h"
@@ -63,16 +64,17 @@ struct OctreeBudget {
   std::size_t io_bytes = 0;     // the soup file reader's buffer
   std::size_t queue_bytes = 0;  // leaves waiting for a thread
   std::size_t keep_bytes = 0;   // children's LODs held for their parents (lod_tree.h)
+  std::size_t merge_bytes = 0;  // an internal node's merged input (LodTreeOptions::merge_bytes)
+  std::size_t work_bytes = 0;   // node work in flight (LodTreeOptions::work_bytes)
   std::uint64_t sort_bytes = 0;
 };
 
 Result<OctreeBudget> divide_octree_budget(const BakeOptions& options, VertexLayout layout,
                                           unsigned workers) {
-  // One leaf's records. A thread doing node work holds a leaf's records, its mesh, the LOD
-  // chain and the simplifier's per-node arrays, or an internal node's merged children (about
-  // four leaves' worth of triangles at half a leaf's resolution each): kNodeWorkLeaves leaves
-  // of records together. The octree pass holds a candidate and a replay of one.
-  constexpr std::uint64_t kNodeWorkLeaves = 3;
+  // One leaf's records. The octree pass holds a candidate and a replay of one. Node work in
+  // flight is limited to the largest node's estimate (lod_tree.h, max_node_work_bytes: an
+  // internal node merging up to twice merge_bytes, ~23 MB with the defaults), which the threads
+  // share; without LODs a thread holds a leaf's records.
   const std::uint64_t leaf =
       (std::uint64_t{options.max_tris} + 1) * soup_record_bytes(layout);
   OctreeBudget b;
@@ -84,13 +86,21 @@ Result<OctreeBudget> divide_octree_budget(const BakeOptions& options, VertexLayo
   b.keep_bytes = static_cast<std::size_t>(
       options.lods ? std::max(2 * leaf, options.memory_budget_bytes / 16) : 0);
   const std::uint64_t threads = workers + 1;  // the caller works too
-  const std::uint64_t reserve = b.io_bytes + (workers ? b.queue_bytes : 0) + b.keep_bytes +
-                                threads * (options.lods ? kNodeWorkLeaves : 1) * leaf + 2 * leaf;
-  if (reserve > options.memory_budget_bytes / 2) {
-    return usage_error("memory budget of " + std::to_string(options.memory_budget_bytes >> 20) +
+  b.merge_bytes = 2 * b.queue_bytes;
+  const std::uint64_t work =
+      options.lods ? max_node_work_bytes(b.merge_bytes, static_cast<std::size_t>(leaf)) : threads * leaf;
+  if (options.lods) b.work_bytes = static_cast<std::size_t>(work);
+  const std::uint64_t reserve = b.io_bytes + (workers ? b.queue_bytes : 0) + b.keep_bytes + work + 2 * leaf;
+  // the sort keeps at least a quarter of the budget
+  if (reserve > options.memory_budget_bytes - options.memory_budget_bytes / 4) {
+    // reserve <= fixed + budget / 16 (the io buffer at its largest, the kept LODs at theirs),
+    // so any budget of at least 16/11 x fixed passes
+    const std::uint64_t fixed = (std::uint64_t{1} << 20) + (workers ? b.queue_bytes : 0) + 2 * leaf + work + 2 * leaf;
+    return usage_error("memory budget of " + std::to_string((options.memory_budget_bytes + options.program_bytes) >> 20) +
                        " MiB is too small for --max-tris " + std::to_string(options.max_tris) +
                        " with layout " + layout.describe() + ": needs at least " +
-                       std::to_string((2 * reserve >> 20) + 1) + " MiB");
+                       std::to_string(((16 * fixed / 11 + options.program_bytes) >> 20) + 1) +
+                       " MiB (a smaller --max-tris needs less)");
   }
   b.sort_bytes = options.memory_budget_bytes - reserve;
   return b;
@@ -235,6 +245,8 @@ LodTreeOptions lod_tree_options(const BakeOptions& options, VertexLayout layout,
   o.workers = workers;
   o.queue_bytes = budget.queue_bytes;
   o.keep_bytes = budget.keep_bytes;
+  o.merge_bytes = budget.merge_bytes;
+  o.work_bytes = budget.work_bytes;
   o.streamed_max_lod1_triangles = max_depth_leaf_triangles(options.memory_budget_bytes, layout, options.max_tris);
   o.streamed_chunk_triangles = kStreamedChunkLeaves * o.streamed_max_lod1_triangles;
   o.streamed_sort_bytes = options.memory_budget_bytes / kStreamedSortShare;
@@ -489,7 +501,7 @@ Result<Manifest> manifest_header(const BakeOptions& options, unsigned threads,
   m.parameters.input = options.input.string();
   m.parameters.max_tris = options.max_tris;
   m.parameters.max_depth = options.max_depth;
-  m.parameters.memory_budget_bytes = options.memory_budget_bytes;
+  m.parameters.memory_budget_bytes = options.memory_budget_bytes + options.program_bytes;
   m.parameters.threads = threads;
   m.parameters.method = options.lods ? std::string(method_name(options.method)) : "";
   if (octree.nodes.empty()) {
@@ -544,17 +556,21 @@ Status check_options(const BakeOptions& options) {
     return usage_error("max_depth " + std::to_string(options.max_depth) + " is above the limit of " +
                        std::to_string(kMaxOctreeDepth));
   }
-  if (options.memory_budget_bytes < kMinBakeBudget) {
+  if (options.memory_budget_bytes < options.program_bytes + kMinBakeBudget) {
     return usage_error("memory budget of " + std::to_string(options.memory_budget_bytes) +
-                       " bytes is below the minimum of " + std::to_string(kMinBakeBudget));
+                       " bytes is below the minimum of " + std::to_string(options.program_bytes + kMinBakeBudget));
   }
   if (options.output.empty()) return usage_error("no output directory given");
   return check_replaceable(options.output);
 }
 
-Result<BakeReport> run_bake(const BakeOptions& options) {
+Result<BakeReport> run_bake(const BakeOptions& given) {
   const auto start = Clock::now();
-  OCTOLOD_RETURN_IF_ERROR(check_options(options));
+  OCTOLOD_RETURN_IF_ERROR(check_options(given));
+  // from here on memory_budget_bytes is the bake's own share; program_bytes only names it in
+  // messages and the manifest
+  BakeOptions options = given;
+  options.memory_budget_bytes -= given.program_bytes;
   const unsigned threads =
       options.threads ? options.threads : std::max(1u, std::thread::hardware_concurrency());
   if (options.cleanup_on_signal) install_signal_cleanup();
@@ -571,6 +587,15 @@ Result<BakeReport> run_bake(const BakeOptions& options) {
   const fs::path work_parent = options.work_dir.empty() ? parent : options.work_dir;
   if (!fs::is_directory(work_parent, ec))
     return io_error("work directory '" + work_parent.string() + "' does not exist");
+  {
+    // a budget too small for max_tris is refused before any work (the header names the layout)
+    PlyReadOptions header_only;
+    header_only.buffer_bytes = 4096;
+    auto reader = PlyReader::open(options.input, header_only);
+    if (!reader.ok()) return reader.status();
+    auto budget = divide_octree_budget(options, reader.value()->info().layout, threads > 1 ? threads - 1 : 0);
+    if (!budget.ok()) return budget.status();
+  }
   remove_stale_temp_dirs(parent);
   if (work_parent != parent) remove_stale_temp_dirs(work_parent);
   auto staging = TempDir::create(parent, "out");

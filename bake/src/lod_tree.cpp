@@ -8,6 +8,7 @@
 #include <cerrno>
 #include <chrono>
 #include <condition_variable>
+#include <limits>
 #include <mutex>
 #include <optional>
 #include <string>
@@ -72,6 +73,7 @@ struct Slot {
 struct Task {
   std::int32_t node = -1;
   std::uint64_t weight = 0;  // input triangles
+  std::size_t work = 0;      // node_work_bytes within LodTreeOptions::work_bytes; 0 without a limit
   std::vector<std::byte> records;  // a leaf's soup records; empty for an internal node
   TempFile streamed;               // a streamed leaf's records instead (add_streamed_leaf)
   bool leaf = false;
@@ -103,10 +105,13 @@ struct Scratch {
 
 Status interrupted() { return io_error("bake interrupted by a signal"); }
 
-// An internal node whose chosen children's LODs together exceed this many times merge_bytes is
-// built streaming (run_streamed_internal): its node work stays about that of a merge_bytes
-// input instead of growing with the model (in memory, ~600 bytes per merged triangle).
-constexpr std::size_t kStreamedMergeFactor = 2;
+// node_work_bytes = kNodeWorkFixed + kNodeWorkPerInputByte x input: the measurements in
+// lod_tree.h with some headroom (the fixed part covers small nodes' tables).
+constexpr std::size_t kNodeWorkFixed = 256 << 10;
+constexpr std::size_t kNodeWorkPerInputByte = 10;
+// The node work of a streamed node (its memory is bounded by its own limits, not its input):
+// it runs alone.
+constexpr std::size_t kRunsAlone = std::numeric_limits<std::size_t>::max();
 
 }  // namespace
 
@@ -130,6 +135,7 @@ class LodTreeBuilder::Impl {
     task.node = node;
     task.leaf = true;
     task.weight = nodes[static_cast<std::size_t>(node)].triangles;
+    task.work = streamed.empty() ? node_work_bytes(records.size()) : kRunsAlone;  // a streamed leaf runs alone
     queued_bytes_ += records.size();
     task.records = std::move(records);
     task.streamed = std::move(streamed);
@@ -141,7 +147,7 @@ class LodTreeBuilder::Impl {
         if (heap_.empty()) break;
       } else if (queued_bytes_ <= options_.queue_bytes) {
         break;
-      } else if (heap_.empty()) {
+      } else if (!can_start()) {
         space_.wait(lock);
         continue;
       }
@@ -166,7 +172,7 @@ class LodTreeBuilder::Impl {
       // the lock was released (run_one, progress), so no completion is missed.
       std::uint64_t reported = ~std::uint64_t{0};
       while (error_.ok() && completed_ < total_nodes_) {
-        if (!heap_.empty()) {
+        if (can_start()) {
           run_one(lock, caller_scratch_);
         } else if (progress && reported != completed_) {
           reported = completed_;
@@ -244,16 +250,28 @@ class LodTreeBuilder::Impl {
   }
 
   void push_internal(std::int32_t node) {
+    const Slot& s = slot(node);
     Task task;
     task.node = node;
-    task.weight = slot(node).child_triangles;
+    task.weight = s.child_triangles;
+    const std::size_t input = options_.build_lods && s.pending ? plan_merge(s.pending->child).bytes : 0;
+    // a merge too large for memory is built streaming, alone
+    task.work = input > kStreamedMergeFactor * merge_bytes_ ? kRunsAlone : node_work_bytes(input);
     push(std::move(task));
   }
 
   void push(Task task) {
+    // accounted only against a limit; a node whose work reaches the limit runs alone
+    task.work = options_.work_bytes > 0 ? std::min(task.work, options_.work_bytes) : 0;
     heap_.push_back(std::move(task));
     std::push_heap(heap_.begin(), heap_.end(), later);
     work_.notify_one();
+  }
+
+  // Whether the heaviest ready node may start: its node work fits beside the running ones' in
+  // work_bytes, or nothing runs. Under the lock.
+  bool can_start() const {
+    return !heap_.empty() && (running_work_ == 0 || heap_.front().work <= options_.work_bytes - running_work_);
   }
 
   // Pops the heaviest ready node and runs it with the lock released. Under the lock.
@@ -261,6 +279,7 @@ class LodTreeBuilder::Impl {
     std::pop_heap(heap_.begin(), heap_.end(), later);
     Task task = std::move(heap_.back());
     heap_.pop_back();
+    running_work_ += task.work;
     Slot& s = slot(task.node);
     const std::string dir = node_path(s.prefix, s.depth);
     const Bounds cell = options_.cube.cell(s.prefix, s.depth);
@@ -288,6 +307,7 @@ class LodTreeBuilder::Impl {
     const double seconds = std::chrono::duration<double>(Clock::now() - start).count();
 
     lock.lock();
+    running_work_ -= task.work;
     stats_.work_seconds += seconds;
     stats_.reread_lods += rereads;
     kept_bytes_ -= released;
@@ -344,29 +364,40 @@ class LodTreeBuilder::Impl {
     return done;
   }
 
+  // The LODs an internal node merges: choose_merged_lods over its present children (octant
+  // order), their lod_mesh_bytes and their largest error.
+  struct MergePlan {
+    std::vector<std::size_t> chosen;
+    std::size_t bytes = 0;
+    double input_error = 0;
+  };
+  MergePlan plan_merge(const std::array<ChildLod, 8>& children) const {
+    std::vector<std::vector<LodInfo>> chains;
+    for (const ChildLod& c : children)
+      if (c.present) chains.push_back(c.lods);
+    MergePlan plan;
+    plan.chosen = choose_merged_lods(chains, options_.layout, merge_bytes_);
+    std::size_t next = 0;
+    for (const ChildLod& c : children) {
+      if (!c.present) continue;
+      const LodInfo& lod = c.lods[plan.chosen[next++]];
+      plan.input_error = std::max(plan.input_error, lod.error);
+      plan.bytes += lod_mesh_bytes(lod, options_.layout);
+    }
+    return plan;
+  }
+
   Result<NodeDone> run_internal(std::array<ChildLod, 8>& children, const std::string& dir,
                                 const Bounds& cell) {
     if (cleanup_signal_received()) return interrupted();
     if (!options_.build_lods) return NodeDone{};
-    std::vector<std::vector<LodInfo>> chains;
-    for (const ChildLod& c : children)
-      if (c.present) chains.push_back(c.lods);
-    const std::vector<std::size_t> chosen = choose_merged_lods(chains, options_.layout, merge_bytes_);
-    double input_error = 0;
-    std::size_t merged_bytes = 0;
-    std::size_t next = 0;
-    for (ChildLod& c : children) {
-      if (!c.present) continue;
-      const LodInfo& lod = c.lods[chosen[next++]];
-      input_error = std::max(input_error, lod.error);
-      merged_bytes += lod_mesh_bytes(lod, options_.layout);
-    }
+    const auto [chosen, merged_bytes, input_error] = plan_merge(children);
     if (merged_bytes > kStreamedMergeFactor * merge_bytes_) {
       auto streamed = run_streamed_internal(children, chosen, input_error, dir, cell);
       if (!streamed.ok() || !streamed->lods.lods.empty()) return streamed;
     }
     std::vector<const NodeMesh*> meshes;
-    next = 0;
+    std::size_t next = 0;
     for (ChildLod& c : children) {
       if (!c.present) continue;
       OCTOLOD_RETURN_IF_ERROR(load_chosen(c, chosen[next++]));
@@ -519,7 +550,7 @@ class LodTreeBuilder::Impl {
     Scratch scratch;
     std::unique_lock lock(mutex_);
     for (;;) {
-      work_.wait(lock, [&] { return stopping_ || !error_.ok() || !heap_.empty(); });
+      work_.wait(lock, [&] { return stopping_ || !error_.ok() || can_start(); });
       if (stopping_ || !error_.ok()) return;
       run_one(lock, scratch);
     }
@@ -549,6 +580,7 @@ class LodTreeBuilder::Impl {
   std::optional<NodeLodsLog> log_;  // every finished node's record
   std::size_t queued_bytes_ = 0;   // records of leaves not yet done
   std::size_t kept_bytes_ = 0;     // children's LODs held for their parents
+  std::size_t running_work_ = 0;   // node_work_bytes of the nodes running now
   std::uint64_t completed_ = 0;
   std::uint64_t total_nodes_ = 0;
   bool stopping_ = false;
@@ -559,6 +591,14 @@ class LodTreeBuilder::Impl {
 
 std::size_t lod_mesh_bytes(const LodInfo& lod, VertexLayout layout) {
   return (std::size_t{lod.vertices} * layout.floats() + 3 * std::size_t{lod.triangles}) * sizeof(float);
+}
+
+std::size_t node_work_bytes(std::size_t input_bytes) {
+  return kNodeWorkFixed + kNodeWorkPerInputByte * input_bytes;
+}
+
+std::size_t max_node_work_bytes(std::size_t merge_bytes, std::size_t leaf_record_bytes) {
+  return node_work_bytes(std::max(kStreamedMergeFactor * merge_bytes, leaf_record_bytes));
 }
 
 std::vector<std::size_t> choose_merged_lods(const std::vector<std::vector<LodInfo>>& children,

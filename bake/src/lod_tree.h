@@ -35,9 +35,10 @@
 // up its parent (and the siblings' kept LODs) for long. A node's files depend only on its own input, which depends only on the
 // input mesh and the options: the output is the same for any thread count and schedule.
 //
-// Memory: the leaves waiting for a thread (queue_bytes), the node work in flight (an internal
-// node's input is at most merge_bytes of mesh), and the children's finest LODs kept for their
-// pending parents up to keep_bytes; past that, or when the parent merges a coarser one, the
+// Memory: the leaves waiting for a thread (queue_bytes), the node work in flight (work_bytes: a
+// node starts only while the running nodes' node_work_bytes estimates fit beside its own; an
+// internal node's input is at most twice merge_bytes of mesh), and the children's finest LODs
+// kept for their pending parents up to keep_bytes; past that, or when the parent merges a coarser one, the
 // parent reads the child's file (identical bytes). A finished node's records go to a work file
 // (node_lods_log.h) and its scheduler slot is dropped: what stays per node is 8 bytes of log.
 #pragma once
@@ -85,6 +86,10 @@ struct LodTreeOptions {
   // (max_tris and the layout), ~1 MiB with the defaults: 1M rock / city peak RSS at --memory
   // 64M 74 / 63 MiB; at twice that the city's was 92 MiB, over the budget + 24 MiB.
   std::size_t merge_bytes = 0;
+  // Node work in flight: the sum of the running nodes' node_work_bytes stays within it, except
+  // that a node always runs when no other does (so one whose estimate exceeds it, a streamed
+  // node's included, runs alone). 0: no limit. The bake reserves max_node_work_bytes.
+  std::size_t work_bytes = 0;
   // Leaves handed out as record files (add_streamed_leaf, streamed_leaf.h): triangles held in
   // memory at once, their LOD 1's limit, the edge sort's memory and temporary directory.
   std::uint64_t streamed_chunk_triangles = 1 << 16;
@@ -95,6 +100,21 @@ struct LodTreeOptions {
 
 // Bytes of the NodeMesh of a LOD: its vertex floats and its indices.
 std::size_t lod_mesh_bytes(const LodInfo& lod, VertexLayout layout);
+
+// Node work's heap high-water mark, estimated from its input: a leaf's soup records or an
+// internal node's merged LODs (lod_mesh_bytes), in bytes. The simplifier's working set (the
+// prepared node, clustering, quadrics, wedge tables, the LOD chain, the error bound's arrays) is
+// at most ~10 times its input: measured per node (heap of the thread, 1M and 10M rock, 60K
+// city at --max-tris 500 and 2000) 2.8x for full rock leaves, up to 9x for a city's small
+// leaves (two vertices per triangle), 5-10x for internal nodes (10.4x at 300 KB, 7.2x at 1.1
+// MB, 4.9x at 1.9 MB of merged input).
+std::size_t node_work_bytes(std::size_t input_bytes);
+// The largest node_work_bytes of a tree with these limits: an internal node merges in memory
+// up to kStreamedMergeFactor x merge_bytes (more is built streaming); a leaf holds at most
+// leaf_record_bytes of records. What the bake reserves for node work (work_bytes).
+std::size_t max_node_work_bytes(std::size_t merge_bytes, std::size_t leaf_record_bytes);
+// Merged input past this many merge_bytes is built streaming (lod_tree.cpp, run_streamed_internal).
+inline constexpr std::size_t kStreamedMergeFactor = 2;
 
 // Which LOD of each child an internal node merges (an index into each child's chain, finest
 // first): every child's finest LOD when their lod_mesh_bytes sum to at most merge_bytes;

@@ -58,6 +58,7 @@ int run_bake(const BakeArgs& args, const CommandContext& context) {
   options.max_tris = args.max_tris;
   options.max_depth = args.max_depth;
   options.memory_budget_bytes = memory.value();
+  options.program_bytes = bake::kCliProgramBytes;  // --memory caps the whole process
   options.work_dir = args.work_dir;
   options.threads = args.threads;
   options.force_out_of_core = args.out_of_core;

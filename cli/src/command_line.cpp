@@ -47,8 +47,10 @@ void add_bake_command(CLI::App& app, CommandContext& context) {
       ->check(CLI::Range(0u, 21u));
   command
       ->add_option("--memory", args->memory,
-                   "Memory budget for the whole bake: 16M, 64M, 1G (peak RSS ~ this + a few MB; "
-                   "up to a quarter more per leaf at --max-depth larger than --max-tris)")
+                   "Peak memory (RSS) of the whole process: 48M, 64M, 1G (the program itself "
+                   "takes 8M of it; at least ~43M at --max-tris 2000 with every attribute, the "
+                   "bake says how much; up to a quarter more per leaf at --max-depth larger than "
+                   "--max-tris)")
       ->capture_default_str();
   command->add_option("--work-dir", args->work_dir,
                       "Directory for temporary files (default: next to the output)");

@@ -27,10 +27,12 @@
 // stats aside), except for the leaves at max_depth larger than max_depth_leaf_triangles of the
 // budget, whose LODs are built streaming in chunks of that size (see max_depth below).
 //
-// Memory: the soup stage, then the octree sort, the leaf queue, the node work in flight and the
-// children's LODs kept for their parents share the budget; kept LODs beyond their share are
-// re-read from their files by the parent. Peak RSS is about the budget plus the program's
-// fixed footprint, plus up to a quarter of the budget for each leaf at max_depth larger than
+// Memory: the soup stage, then the octree sort, the leaf queue, the node work in flight (as
+// many nodes at once as their estimated working sets fit the reserve for the largest one) and
+// the children's LODs kept for their parents share the budget less program_bytes; kept LODs
+// beyond their share are re-read from their files by the parent. Peak RSS stays within the
+// budget (with program_bytes covering the program's own footprint), plus up to a quarter of
+// the budget for each leaf at max_depth larger than
 // usual in work (each thread may hold one); a leaf at max_depth too large for that
 // quarter (max_depth_leaf_triangles) is built streaming from a temporary file within it.
 // Outside the budget, per octree node: 72 bytes (the octree's node, the offset of its LOD
@@ -76,11 +78,19 @@ struct BakeOptions {
   // first step than an in-memory leaf's halving; raise max_depth for dense models when that
   // matters.
   std::uint32_t max_depth = 10;
-  // Cap on the bake's buffers together (soup stage, octree sort, leaf buffers); the peak RSS is
-  // this plus the program's fixed footprint (and the share of leaves at max_depth larger than
-  // max_tris + 1, up to max_depth_leaf_triangles, in memory or streamed). Larger budgets mean fewer sorted runs and merges
-  // and, once the vertices fit in half of it, the in-core soup path. At least kMinBakeBudget.
+  // Cap on the process's memory: program_bytes for what is not the bake's, the rest for the
+  // bake's buffers together (soup stage, octree sort, leaf buffers, node work in flight,
+  // children's LODs kept for their parents). Not counted: about 72 bytes per octree node, and
+  // the share of leaves at max_depth larger than max_tris + 1 (up to max_depth_leaf_triangles,
+  // in memory or streamed). Larger budgets mean fewer sorted runs and merges and, once the
+  // vertices fit in half of it, the in-core soup path. At least program_bytes + kMinBakeBudget,
+  // and enough for max_tris (the bake says how much when it is not; about 35 MiB with every
+  // attribute at max_tris 2000, most of it for the largest node's simplification).
   std::uint64_t memory_budget_bytes = std::uint64_t{64} << 20;
+  // The part of memory_budget_bytes the process holds besides the bake (its code, libraries,
+  // thread stacks): the CLI sets kCliProgramBytes so that its --memory caps the whole
+  // process's peak RSS; 0 for a caller whose budget is the bake's own.
+  std::uint64_t program_bytes = 0;
   // Where the temporary files go (inside a fresh ".octolod-tmp-*" directory); empty: next to
   // the output. Needs room for about two soups (3 x vertex bytes + 4 per triangle, twice).
   std::filesystem::path work_dir;
@@ -114,6 +124,10 @@ std::string_view method_name(ClusterMethod method);
 std::optional<ClusterMethod> parse_method(std::string_view name);
 
 inline constexpr std::uint64_t kMinBakeBudget = std::uint64_t{1} << 20;
+// What the octolod CLI holds before a bake starts, rounded up: its code and libraries
+// (OpenMesh, Draco, CGAL, OSMesa, ...) resident, 6.9 MiB measured idle, and the bake's thread
+// stacks.
+inline constexpr std::uint64_t kCliProgramBytes = std::uint64_t{8} << 20;
 
 // The most triangles a leaf at max_depth may hold under a budget of memory_budget_bytes with
 // vertices of `layout`, never fewer than max_tris + 1 (a leaf that small is always built in
