@@ -132,11 +132,10 @@ TEST(OctreeBuilder, SplitsNodesOverMaxTrisAndHandsOutEveryRecordOnce) {
     EXPECT_EQ(t.nodes[3].path(), "0/5");
     EXPECT_EQ(t.nodes[4].path(), "3");
     EXPECT_EQ(t.nodes[5].path(), "6");
-    EXPECT_EQ(t.nodes[0].children[0], 1);
-    EXPECT_EQ(t.nodes[0].children[3], 4);
-    EXPECT_EQ(t.nodes[0].children[6], 5);
-    EXPECT_EQ(t.nodes[1].children[1], 2);
-    EXPECT_EQ(t.nodes[1].children[5], 3);
+    const NodeChildren children(t.nodes);
+    EXPECT_EQ(children.of(0), (std::array<std::int32_t, 8>{1, -1, -1, 4, -1, -1, 5, -1}));
+    EXPECT_EQ(children.of(1), (std::array<std::int32_t, 8>{-1, 2, -1, -1, -1, 3, -1, -1}));
+    EXPECT_EQ(children.of(4), (std::array<std::int32_t, 8>{-1, -1, -1, -1, -1, -1, -1, -1}));
     EXPECT_EQ(t.nodes[3].parent, 1);
     const std::map<std::int32_t, std::vector<std::uint64_t>> expected{
         {2, {0, 1}}, {3, {2, 3}}, {4, {4}}, {5, {5, 6}}};

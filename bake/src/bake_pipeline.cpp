@@ -515,7 +515,7 @@ Result<Manifest> manifest_header(const BakeOptions& options, unsigned threads,
 }
 
 // Node `index` of the manifest, from the octree's node and its LOD record.
-Result<NodeInfo> manifest_node(const OctreeResult& octree, std::size_t index) {
+Result<NodeInfo> manifest_node(const OctreeResult& octree, const NodeChildren& children, std::size_t index) {
   NodeInfo n;
   if (octree.nodes.empty()) {  // no triangles: a root leaf without LODs
     n.cell = octree.cube.cell(0, 0);
@@ -525,7 +525,7 @@ Result<NodeInfo> manifest_node(const OctreeResult& octree, std::size_t index) {
   n.path = o.path();
   n.depth = o.depth;
   n.parent = o.parent;
-  n.children = o.children;
+  n.children = children.of(index);
   n.cell = octree.cube.cell(o.prefix, o.depth);
   n.source_triangles = o.triangles;
   auto lods = octree.lods->read(static_cast<std::int32_t>(index), n.path);
@@ -540,8 +540,9 @@ Result<NodeInfo> manifest_node(const OctreeResult& octree, std::size_t index) {
 Status write_bake_manifest(const fs::path& path, const Manifest& header,
                            const OctreeResult& octree, BakeReport& report) {
   const std::size_t count = std::max<std::size_t>(octree.nodes.size(), 1);
+  const NodeChildren children(octree.nodes);
   return write_manifest(path, header, count, [&](std::size_t i) -> Result<NodeInfo> {
-    Result<NodeInfo> n = manifest_node(octree, i);
+    Result<NodeInfo> n = manifest_node(octree, children, i);
     if (!n.ok()) return n;
     report.lods += n->lods.size();
     for (const LodInfo& l : n->lods) report.bytes += l.bytes;

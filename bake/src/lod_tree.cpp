@@ -163,7 +163,7 @@ class LodTreeBuilder::Impl {
       OCTOLOD_RETURN_IF_ERROR(open_log());
       register_nodes(nodes);
       while (!open_.empty()) {
-        close(open_.back(), nodes);
+        close(open_.back());
         open_.pop_back();
       }
       total_nodes_ = nodes.size();
@@ -220,6 +220,7 @@ class LodTreeBuilder::Impl {
       s.parent = n.parent;
       s.depth = n.depth;
       slots_.emplace(static_cast<std::int32_t>(i), std::move(s));
+      if (n.parent >= 0) ++slot(n.parent).children;  // registered before it: a lower index
     }
     registered_ = nodes.size();
   }
@@ -236,16 +237,15 @@ class LodTreeBuilder::Impl {
     while (common < open_.size() && common < path.size() && open_[common] == path[common])
       ++common;
     while (open_.size() > common) {
-      close(open_.back(), nodes);
+      close(open_.back());
       open_.pop_back();
     }
     open_ = std::move(path);
   }
 
-  void close(std::int32_t node, const OctreeNodes& nodes) {
+  void close(std::int32_t node) {
     Slot& s = slot(node);
     s.closed = true;
-    for (std::int32_t c : nodes[static_cast<std::size_t>(node)].children) s.children += c >= 0;
     if (s.done == s.children) push_internal(node);
   }
 

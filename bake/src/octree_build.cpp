@@ -91,14 +91,12 @@ void OctreeBuilder::open_candidate(std::uint64_t key) {
 
 std::int32_t OctreeBuilder::new_child(std::int32_t parent, std::uint64_t key) {
   OctreeNode node;
-  OctreeNode& p = nodes_[static_cast<std::size_t>(parent)];
+  const OctreeNode& p = nodes_[static_cast<std::size_t>(parent)];
   node.depth = p.depth + 1;
   node.prefix = prefix_of(key, node.depth);
   node.parent = parent;
-  const std::uint32_t octant = static_cast<std::uint32_t>(node.prefix & 7u);
-  assert(p.children[octant] < 0 && "keys are not sorted");
+  assert((nodes_.back().parent != parent || nodes_.back().prefix < node.prefix) && "keys are not sorted");
   const auto index = static_cast<std::int32_t>(nodes_.size());
-  p.children[octant] = index;
   nodes_.push_back(node);
   return index;
 }
@@ -207,6 +205,27 @@ Status OctreeBuilder::close_candidate() {
   Status handed = hand_out_leaf(leaf, std::move(records), buffer_keys_);
   buffer_keys_.clear();
   return handed;
+}
+
+static_assert(sizeof(OctreeNode) == 32, "one OctreeNode per node of the tree is held until the manifest: keep it small");
+
+NodeChildren::NodeChildren(const OctreeNodes& nodes) : nodes_(nodes), first_(nodes.size() + 1, 0) {
+  for (const OctreeNode& n : nodes)
+    if (n.parent >= 0) ++first_[static_cast<std::size_t>(n.parent) + 1];
+  for (std::size_t i = 0; i < nodes.size(); ++i) first_[i + 1] += first_[i];
+  child_.resize(first_.back());
+  std::vector<std::uint32_t> fill(first_.begin(), first_.end() - 1);
+  // children in index order, which is octant order (depth-first, key order)
+  for (std::size_t i = 0; i < nodes.size(); ++i)
+    if (nodes[i].parent >= 0) child_[fill[static_cast<std::size_t>(nodes[i].parent)]++] = static_cast<std::int32_t>(i);
+}
+
+std::array<std::int32_t, 8> NodeChildren::of(std::size_t node) const {
+  std::array<std::int32_t, 8> children;
+  children.fill(-1);
+  for (std::uint32_t k = first_[node]; k < first_[node + 1]; ++k)
+    children[nodes_[static_cast<std::size_t>(child_[k])].prefix & 7u] = child_[k];
+  return children;
 }
 
 Status OctreeBuilder::finish() {

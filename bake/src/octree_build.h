@@ -34,21 +34,35 @@
 
 namespace octolod::bake {
 
+// 32 bytes: a tree of 100M triangles has 212K of them, held until its manifest is written. A
+// node's children are the nodes whose parent it is (node_children), octant = prefix & 7.
 struct OctreeNode {
   std::uint64_t prefix = 0;  // octant path from the root, 3 bits per level (morton.h)
-  std::uint32_t depth = 0;   // root = 0
-  std::int32_t parent = -1;  // index into OctreeBuilder::nodes(), -1 for the root
-  std::array<std::int32_t, 8> children{-1, -1, -1, -1, -1, -1, -1, -1};  // by octant
   std::uint64_t triangles = 0;  // in the subtree (complete after finish())
+  std::int32_t parent = -1;  // index into OctreeBuilder::nodes(), -1 for the root
+  std::uint32_t depth = 0;   // root = 0
   bool leaf = false;
 
   // "" for the root, else the octants from the root joined by '/': "3/5".
   std::string path() const;
 };
 
-// The tree's nodes by index. A deque: the nodes of a large tree (212K for 100M triangles, 64
-// bytes each) are never copied whole, nor held twice while a vector's doubling copies them.
+// The tree's nodes by index. A deque: the nodes of a large tree are never copied whole, nor
+// held twice while a vector's doubling copies them.
 using OctreeNodes = std::deque<OctreeNode>;
+
+// Every node's children by octant (-1 where none), from the parent links: a transient index
+// (CSR, 8 bytes per node) for walking a finished tree.
+class NodeChildren {
+ public:
+  explicit NodeChildren(const OctreeNodes& nodes);
+  std::array<std::int32_t, 8> of(std::size_t node) const;
+
+ private:
+  const OctreeNodes& nodes_;
+  std::vector<std::uint32_t> first_;  // node i's children are child_[first_[i] .. first_[i+1])
+  std::vector<std::int32_t> child_;
+};
 
 // Receives a finished leaf: its node index and its records in leaf order (ownership passes).
 using LeafFn = std::function<Status(std::int32_t node, std::vector<std::byte>&& records)>;
