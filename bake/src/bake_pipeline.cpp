@@ -30,6 +30,7 @@
 #include "record_file.h"
 #include "streamed_leaf.h"
 #include "temp_dir.h"
+#include "tree_paths.h"
 
 namespace octolod::bake {
 namespace {
@@ -342,6 +343,7 @@ Result<OctreeResult> build_octree(const BakeOptions& options, const SoupResult& 
                         },
                         max_depth_leaf_spill(options, soup.layout, spill, lod_tree, builder_ptr));
   builder_ptr = &builder;
+  builder.forget_finished_nodes();  // the LOD log keeps what the manifest needs of them
   std::uint64_t done = 0;
   Status streamed;
   for (;;) {
@@ -480,6 +482,7 @@ Result<OctreeResult> build_octree_from_mesh(const BakeOptions& options, unsigned
       max_depth_leaf_spill(options, mesh.layout, spill, lod_tree, builder_ptr,
                            [&](std::size_t count) { return spill.append(gather(count)); }));
   builder_ptr = &builder;
+  builder.forget_finished_nodes();  // the LOD log keeps what the manifest needs of them
   for (std::size_t first = 0; first < n; first += kMeshKeyBlock) {
     const std::size_t m = std::min(kMeshKeyBlock, n - first);
     OCTOLOD_RETURN_IF_ERROR(
@@ -508,30 +511,30 @@ Result<Manifest> manifest_header(const BakeOptions& options, unsigned threads,
     m.bounds = soup.bounds;
     return m;
   }
-  auto root = octree.lods->read(0, "");
+  auto root = octree.lods->read(0);
   if (!root.ok()) return root.status();
-  m.bounds = root->bounds;  // the subtree's: the whole model's
+  m.bounds = root->lods.bounds;  // the subtree's: the whole model's
   return m;
 }
 
-// Node `index` of the manifest, from the octree's node and its LOD record.
-Result<NodeInfo> manifest_node(const OctreeResult& octree, const NodeChildren& children, std::size_t index) {
+// Node `index` of the manifest, from its record in the LOD log.
+Result<NodeInfo> manifest_node(const OctreeResult& octree, std::size_t index) {
   NodeInfo n;
   if (octree.nodes.empty()) {  // no triangles: a root leaf without LODs
     n.cell = octree.cube.cell(0, 0);
     return n;
   }
-  const OctreeNode& o = octree.nodes[index];
-  n.path = o.path();
-  n.depth = o.depth;
-  n.parent = o.parent;
-  n.children = children.of(index);
-  n.cell = octree.cube.cell(o.prefix, o.depth);
-  n.source_triangles = o.triangles;
-  auto lods = octree.lods->read(static_cast<std::int32_t>(index), n.path);
-  if (!lods.ok()) return lods.status();
-  n.bounds = lods->bounds;
-  n.lods = std::move(lods->lods);
+  auto logged = octree.lods->read(static_cast<std::int32_t>(index));
+  if (!logged.ok()) return logged.status();
+  const NodeShape& shape = logged->shape;
+  n.path = node_path(shape.prefix, shape.depth);
+  n.depth = shape.depth;
+  n.parent = shape.parent;
+  n.children = shape.children;
+  n.cell = octree.cube.cell(shape.prefix, shape.depth);
+  n.source_triangles = shape.triangles;
+  n.bounds = logged->lods.bounds;
+  n.lods = std::move(logged->lods.lods);
   return n;
 }
 
@@ -540,9 +543,8 @@ Result<NodeInfo> manifest_node(const OctreeResult& octree, const NodeChildren& c
 Status write_bake_manifest(const fs::path& path, const Manifest& header,
                            const OctreeResult& octree, BakeReport& report) {
   const std::size_t count = std::max<std::size_t>(octree.nodes.size(), 1);
-  const NodeChildren children(octree.nodes);
   return write_manifest(path, header, count, [&](std::size_t i) -> Result<NodeInfo> {
-    Result<NodeInfo> n = manifest_node(octree, children, i);
+    Result<NodeInfo> n = manifest_node(octree, i);
     if (!n.ok()) return n;
     report.lods += n->lods.size();
     for (const LodInfo& l : n->lods) report.bytes += l.bytes;
@@ -670,12 +672,8 @@ Result<BakeReport> run_bake(const BakeOptions& given) {
     manifest.stats["octree_sort_merge_passes"] = octree->sort.merge_passes;
     manifest.stats["soup_streamed_to_sort"] = octree->soup_streamed ? 1 : 0;
     report.nodes = std::max<std::size_t>(octree->nodes.size(), 1);
-    report.leaves = octree->nodes.empty() ? 1 : 0;
-    for (const OctreeNode& n : octree->nodes) {
-      if (!n.leaf) continue;
-      ++report.leaves;
-      report.depth = std::max(report.depth, n.depth);
-    }
+    report.leaves = octree->nodes.empty() ? 1 : octree->lod_stats.leaves;
+    report.depth = octree->lod_stats.depth;
     manifest.stats["nodes"] = static_cast<double>(report.nodes);
     manifest.stats["leaves"] = static_cast<double>(report.leaves);
     report.peak_rss_bytes = peak_rss_bytes();

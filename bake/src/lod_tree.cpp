@@ -62,6 +62,9 @@ struct Slot {
   std::int32_t parent = -1;
   std::uint32_t depth = 0;
   std::uint32_t children = 0;
+  std::array<std::int32_t, 8> child{-1, -1, -1, -1, -1, -1, -1, -1};  // node indices by octant
+  bool leaf = false;
+  std::uint64_t triangles = 0;  // the subtree's: a leaf's own, then its delivered children's
   std::uint32_t done = 0;    // children whose chains are complete
   std::uint64_t child_triangles = 0;
   bool closed = false;       // internal node whose children are all known
@@ -135,6 +138,11 @@ class LodTreeBuilder::Impl {
     task.node = node;
     task.leaf = true;
     task.weight = nodes[static_cast<std::size_t>(node)].triangles;
+    Slot& s = slot(node);
+    s.leaf = true;
+    s.triangles = task.weight;
+    ++stats_.leaves;
+    stats_.depth = std::max(stats_.depth, s.depth);
     task.work = streamed.empty() ? node_work_bytes(records.size()) : kRunsAlone;  // a streamed leaf runs alone
     queued_bytes_ += records.size();
     task.records = std::move(records);
@@ -220,7 +228,11 @@ class LodTreeBuilder::Impl {
       s.parent = n.parent;
       s.depth = n.depth;
       slots_.emplace(static_cast<std::int32_t>(i), std::move(s));
-      if (n.parent >= 0) ++slot(n.parent).children;  // registered before it: a lower index
+      if (n.parent >= 0) {  // registered before it: a lower index
+        Slot& p = slot(n.parent);
+        ++p.children;
+        p.child[n.prefix & 7u] = static_cast<std::int32_t>(i);
+      }
     }
     registered_ = nodes.size();
   }
@@ -514,14 +526,17 @@ class LodTreeBuilder::Impl {
   void deliver(std::int32_t node, NodeDone done) {
     ++completed_;
     const auto done_slot = slots_.find(node);
-    const std::int32_t parent = done_slot->second.parent;
-    const auto octant = static_cast<std::size_t>(done_slot->second.prefix & 7u);
+    const Slot& s = done_slot->second;
+    const NodeShape shape{s.prefix, s.triangles, s.parent, s.depth, s.child, s.leaf};
     slots_.erase(done_slot);
+    const std::int32_t parent = shape.parent;
+    const auto octant = static_cast<std::size_t>(shape.prefix & 7u);
     const bool has_lod = options_.build_lods && !done.lods.lods.empty();
-    error_ = log_->append(node, done.lods);
+    error_ = log_->append(node, shape, done.lods);
     if (!error_.ok() || parent < 0) return;
     Slot& p = slot(parent);
     ++p.done;
+    p.triangles += shape.triangles;
     if (!p.pending) p.pending = std::make_unique<Pending>();
     p.pending->bounds.extend(done.lods.bounds);
     if (has_lod) {

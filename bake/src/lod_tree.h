@@ -126,6 +126,8 @@ std::vector<std::size_t> choose_merged_lods(const std::vector<std::vector<LodInf
 
 struct LodTreeStats {
   double work_seconds = 0;  // node work summed over threads (indexing, LOD chains, files)
+  std::uint64_t leaves = 0;
+  std::uint32_t depth = 0;  // of the deepest leaf
   // children's LODs 0 a parent re-read from their files because the kept bytes were full (a
   // parent that merges a coarser LOD always reads its file)
   std::uint64_t reread_lods = 0;

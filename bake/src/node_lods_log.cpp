@@ -20,6 +20,12 @@ constexpr std::uint64_t kAbsent = ~std::uint64_t{0};
 // The record: a header, then one LodRecord per LOD, finest first (neither has padding: the
 // file holds no uninitialized bytes).
 struct RecordHeader {
+  std::uint64_t prefix = 0;
+  std::uint64_t triangles = 0;
+  std::int32_t parent = -1;
+  std::uint32_t depth = 0;
+  std::array<std::int32_t, 8> children{};
+  std::uint32_t leaf = 0;
   std::uint32_t lods = 0;
   Bounds bounds;
 };
@@ -29,7 +35,7 @@ struct LodRecord {
   double error = 0;
   std::uint64_t bytes = 0;
 };
-static_assert(sizeof(RecordHeader) == 4 + sizeof(Bounds) && sizeof(LodRecord) == 24);
+static_assert(sizeof(RecordHeader) == 64 + sizeof(Bounds) && sizeof(LodRecord) == 24);
 
 }  // namespace
 
@@ -68,12 +74,14 @@ NodeLodsLog::~NodeLodsLog() {
   writer_.reset();
 }
 
-Status NodeLodsLog::append(std::int32_t node, const NodeLods& lods) {
+Status NodeLodsLog::append(std::int32_t node, const NodeShape& shape, const NodeLods& lods) {
   assert(writer_ && node >= 0 && !has(node) && lods.lods.size() <= kMaxLods);
   const auto index = static_cast<std::size_t>(node);
   if (offsets_.size() <= index) offsets_.resize(index + 1, kAbsent);
   offsets_[index] = writer_->records_written();
-  const RecordHeader header{static_cast<std::uint32_t>(lods.lods.size()), lods.bounds};
+  const RecordHeader header{shape.prefix, shape.triangles, shape.parent,  shape.depth,
+                            shape.children, shape.leaf ? 1u : 0u, static_cast<std::uint32_t>(lods.lods.size()),
+                            lods.bounds};
   OCTOLOD_RETURN_IF_ERROR(writer_->append(reinterpret_cast<const std::byte*>(&header), sizeof header));
   for (const LodInfo& l : lods.lods) {
     const LodRecord r{l.triangles, l.vertices, l.error, l.bytes};
@@ -96,7 +104,7 @@ bool NodeLodsLog::has(std::int32_t node) const {
   return node >= 0 && index < offsets_.size() && offsets_[index] != kAbsent;
 }
 
-Result<NodeLods> NodeLodsLog::read(std::int32_t node, std::string_view dir) const {
+Result<LoggedNode> NodeLodsLog::read(std::int32_t node) const {
   assert(fd_ >= 0 && has(node));
   const std::uint64_t offset = offsets_[static_cast<std::size_t>(node)];
   const auto read_at = [&](void* dst, std::size_t bytes, std::uint64_t at) -> Status {
@@ -115,14 +123,17 @@ Result<NodeLods> NodeLodsLog::read(std::int32_t node, std::string_view dir) cons
   std::vector<LodRecord> records(header.lods);
   OCTOLOD_RETURN_IF_ERROR(
       read_at(records.data(), records.size() * sizeof(LodRecord), offset + sizeof header));
-  NodeLods lods;
+  LoggedNode logged;
+  logged.shape = {header.prefix, header.triangles, header.parent, header.depth, header.children, header.leaf != 0};
+  const std::string dir = node_path(header.prefix, header.depth);
+  NodeLods& lods = logged.lods;
   lods.bounds = header.bounds;
   lods.lods.reserve(records.size());
   for (std::size_t i = 0; i < records.size(); ++i) {
     const LodRecord& r = records[i];
     lods.lods.push_back(LodInfo{r.triangles, r.vertices, r.error, r.bytes, lod_file_name(dir, i)});
   }
-  return lods;
+  return logged;
 }
 
 }  // namespace octolod::bake

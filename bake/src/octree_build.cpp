@@ -78,11 +78,12 @@ void OctreeBuilder::open_candidate(std::uint64_t key) {
   while (!open_.empty()) {
     const OctreeNode& n = nodes_[static_cast<std::size_t>(open_.back())];
     if (prefix_of(key, n.depth) == n.prefix) break;
+    if (forget_) nodes_.forget(static_cast<std::size_t>(open_.back()));
     open_.pop_back();
   }
   if (open_.empty()) {
     assert(nodes_.empty() && "a key outside the root: keys must have max_depth levels");
-    nodes_.emplace_back();
+    nodes_.push_back(OctreeNode{});
     candidate_ = 0;
     return;
   }
@@ -95,7 +96,8 @@ std::int32_t OctreeBuilder::new_child(std::int32_t parent, std::uint64_t key) {
   node.depth = p.depth + 1;
   node.prefix = prefix_of(key, node.depth);
   node.parent = parent;
-  assert((nodes_.back().parent != parent || nodes_.back().prefix < node.prefix) && "keys are not sorted");
+  assert((!nodes_.holds(nodes_.size() - 1) || nodes_.back().parent != parent ||
+          nodes_.back().prefix < node.prefix) && "keys are not sorted");
   const auto index = static_cast<std::int32_t>(nodes_.size());
   nodes_.push_back(node);
   return index;
@@ -143,6 +145,7 @@ Status OctreeBuilder::settle(std::int32_t node, std::size_t begin, std::size_t e
       OCTOLOD_RETURN_IF_ERROR(settle(new_child(node, buffer_keys_[first]), first, last));
       first = last;
     }
+    if (forget_) nodes_.forget(static_cast<std::size_t>(node));
     return {};
   }
   std::vector<std::byte> records(buffer_.begin() + static_cast<std::ptrdiff_t>(begin * record_bytes_),
@@ -157,7 +160,9 @@ Status OctreeBuilder::hand_out_leaf(std::int32_t node, std::vector<std::byte>&& 
   n.leaf = true;
   n.triangles = keys.size();
   if (record_bytes_ > 0) order_equal_keys(records, keys);
-  return on_leaf_(node, std::move(records));
+  OCTOLOD_RETURN_IF_ERROR(on_leaf_(node, std::move(records)));
+  if (forget_) nodes_.forget(static_cast<std::size_t>(node));
+  return {};
 }
 
 // Insertion sort of each run of equal keys by the tie value: the runs are short (triangles of
@@ -198,7 +203,9 @@ Status OctreeBuilder::close_candidate() {
     n.leaf = true;
     n.triangles = spilled_;
     spilled_ = 0;
-    return spill_.finish(leaf);
+    OCTOLOD_RETURN_IF_ERROR(spill_.finish(leaf));
+    if (forget_) nodes_.forget(static_cast<std::size_t>(leaf));
+    return {};
   }
   std::vector<std::byte> records = std::move(buffer_);
   buffer_ = {};
@@ -207,11 +214,9 @@ Status OctreeBuilder::close_candidate() {
   return handed;
 }
 
-static_assert(sizeof(OctreeNode) == 32, "one OctreeNode per node of the tree is held until the manifest: keep it small");
-
 NodeChildren::NodeChildren(const OctreeNodes& nodes) : nodes_(nodes), first_(nodes.size() + 1, 0) {
-  for (const OctreeNode& n : nodes)
-    if (n.parent >= 0) ++first_[static_cast<std::size_t>(n.parent) + 1];
+  for (std::size_t i = 0; i < nodes.size(); ++i)
+    if (nodes[i].parent >= 0) ++first_[static_cast<std::size_t>(nodes[i].parent) + 1];
   for (std::size_t i = 0; i < nodes.size(); ++i) first_[i + 1] += first_[i];
   child_.resize(first_.back());
   std::vector<std::uint32_t> fill(first_.begin(), first_.end() - 1);
@@ -230,6 +235,11 @@ std::array<std::int32_t, 8> NodeChildren::of(std::size_t node) const {
 
 Status OctreeBuilder::finish() {
   if (candidate_ >= 0) OCTOLOD_RETURN_IF_ERROR(close_candidate());
+  if (forget_) {
+    for (std::int32_t node : open_) nodes_.forget(static_cast<std::size_t>(node));
+    open_.clear();
+    return {};
+  }
   open_.clear();
   // Children follow their parents: one backward sweep sums the subtrees.
   for (std::size_t i = nodes_.size(); i-- > 1;) {

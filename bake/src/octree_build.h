@@ -23,19 +23,18 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
-#include <deque>
 #include <functional>
 #include <limits>
 #include <span>
 #include <string>
+#include <unordered_map>
 #include <vector>
 
 #include "octolod/formats/status.h"
 
 namespace octolod::bake {
 
-// 32 bytes: a tree of 100M triangles has 212K of them, held until its manifest is written. A
-// node's children are the nodes whose parent it is (node_children), octant = prefix & 7.
+// A node's children are the nodes whose parent it is (NodeChildren), octant = prefix & 7.
 struct OctreeNode {
   std::uint64_t prefix = 0;  // octant path from the root, 3 bits per level (morton.h)
   std::uint64_t triangles = 0;  // in the subtree (complete after finish())
@@ -47,12 +46,26 @@ struct OctreeNode {
   std::string path() const;
 };
 
-// The tree's nodes by index. A deque: the nodes of a large tree are never copied whole, nor
-// held twice while a vector's doubling copies them.
-using OctreeNodes = std::deque<OctreeNode>;
+// The tree's nodes by index (creation order: parents first, depth-first). size() counts every
+// node created; which are held depends on the builder (OctreeBuilder::forget_finished_nodes).
+class OctreeNodes {
+ public:
+  std::size_t size() const { return count_; }
+  bool empty() const { return count_ == 0; }
+  bool holds(std::size_t i) const { return held_.count(i) != 0; }
+  const OctreeNode& operator[](std::size_t i) const { return held_.at(i); }
+  OctreeNode& operator[](std::size_t i) { return held_.at(i); }
+  const OctreeNode& back() const { return held_.at(count_ - 1); }
+  void push_back(const OctreeNode& node) { held_.emplace(count_++, node); }
+  void forget(std::size_t i) { held_.erase(i); }
 
-// Every node's children by octant (-1 where none), from the parent links: a transient index
-// (CSR, 8 bytes per node) for walking a finished tree.
+ private:
+  std::unordered_map<std::size_t, OctreeNode> held_;
+  std::size_t count_ = 0;
+};
+
+// Every node's children by octant (-1 where none), from the parent links of a tree whose nodes
+// are all held: a transient index (CSR, 8 bytes per node).
 class NodeChildren {
  public:
   explicit NodeChildren(const OctreeNodes& nodes);
@@ -103,6 +116,13 @@ class OctreeBuilder {
   // Parents precede their children; children in octant order (depth-first, key order).
   const OctreeNodes& nodes() const { return nodes_; }
   OctreeNodes& nodes() { return nodes_; }
+  // From now on a node is dropped from nodes() once finished and handed on: a leaf after its
+  // LeafFn or spill finish returned, a split node once the stream has left it (every node is
+  // created before its subtree's leaves are handed out, so a consumer that looks at the new
+  // nodes in each LeafFn call sees each one). What stays held is the open path; OctreeNode::
+  // triangles of a split node is then never summed (finish() does that for a tree held whole).
+  // A tree of 100M triangles has 212K nodes.
+  void forget_finished_nodes() { forget_ = true; }
 
  private:
   void open_candidate(std::uint64_t key);
@@ -131,6 +151,7 @@ class OctreeBuilder {
   std::vector<std::byte> buffer_;   // the candidate's records
   std::vector<std::uint64_t> buffer_keys_;
   std::uint64_t spilled_ = 0;  // records of the candidate given to the spill (0: not spilling)
+  bool forget_ = false;        // forget_finished_nodes()
 };
 
 }  // namespace octolod::bake
