@@ -5,6 +5,7 @@
 #include <cerrno>
 #include <filesystem>
 #include <string>
+#include <vector>
 
 #include "node_lods_log.h"
 #include "record_file.h"
@@ -25,14 +26,16 @@ class NodeLodsLogTest : public ::testing::Test {
   }
   void TearDown() override { fs::remove_all(dir_); }
 
-  // The log's one file in the work directory.
-  fs::path log_file() const {
-    fs::path found;
-    for (const auto& entry : fs::directory_iterator(dir_)) {
-      EXPECT_TRUE(found.empty()) << "more than one file: " << entry.path();
-      found = entry.path();
-    }
+  // The log's files in the work directory: its records and their offsets by node.
+  std::vector<fs::path> files() const {
+    std::vector<fs::path> found;
+    for (const auto& entry : fs::directory_iterator(dir_)) found.push_back(entry.path());
     return found;
+  }
+  fs::path log_file() const {
+    for (const fs::path& file : files())
+      if (file.filename().string().find("index") == std::string::npos) return file;
+    return {};
   }
 
   static NodeLods lods(std::uint32_t count, float at) {
@@ -95,11 +98,14 @@ TEST_F(NodeLodsLogTest, RecordsComeBackByNodeWithTheirFilesNamedAfterTheirDirect
       EXPECT_EQ(l.file, (dir.empty() ? "" : dir + "/") + "lod" + std::to_string(i) + ".olod");
     }
   }
-  // the file goes with the log
-  const fs::path file = log_file();
-  EXPECT_FALSE(file.empty());
+  // a node never recorded is an error naming it, not a record read from nowhere
+  auto missing = log->read(3);
+  ASSERT_FALSE(missing.ok());
+  EXPECT_NE(missing.status().message().find("node 3"), std::string::npos) << missing.status().message();
+  // the files go with the log
+  EXPECT_EQ(files().size(), 2u);
   { NodeLodsLog gone = std::move(log).value(); }
-  EXPECT_FALSE(fs::exists(file));
+  EXPECT_TRUE(files().empty());
 }
 
 TEST_F(NodeLodsLogTest, ACutLogIsAnIoErrorNamingTheFileNodeAndOffset) {

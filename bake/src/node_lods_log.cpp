@@ -15,8 +15,6 @@
 namespace octolod::bake {
 namespace {
 
-constexpr std::uint64_t kAbsent = ~std::uint64_t{0};
-
 // The record: a header, then one LodRecord per LOD, finest first (neither has padding: the
 // file holds no uninitialized bytes).
 struct RecordHeader {
@@ -37,6 +35,11 @@ struct LodRecord {
 };
 static_assert(sizeof(RecordHeader) == 64 + sizeof(Bounds) && sizeof(LodRecord) == 24);
 
+// Where node `node`'s stored offset is in the index file.
+off_t index_position(std::int32_t node) {
+  return static_cast<off_t>(std::uint64_t{static_cast<std::uint32_t>(node)} * sizeof(std::uint64_t));
+}
+
 }  // namespace
 
 Result<NodeLodsLog> NodeLodsLog::create(const std::filesystem::path& work_dir) {
@@ -45,6 +48,10 @@ Result<NodeLodsLog> NodeLodsLog::create(const std::filesystem::path& work_dir) {
   auto writer = RecordWriter::create(log.file_.path(), 1, std::size_t{64} << 10);
   if (!writer.ok()) return writer.status();
   log.writer_.emplace(std::move(writer).value());
+  log.index_file_ = make_temp_file(work_dir, "node-lods-index");
+  log.index_fd_ = ::open(log.index_file_.path().c_str(), O_RDWR | O_CREAT | O_EXCL | O_CLOEXEC, 0600);
+  if (log.index_fd_ < 0)
+    return io_error(log.index_file_.path().string() + ": cannot create: " + std::strerror(errno));
   return log;
 }
 
@@ -52,33 +59,50 @@ NodeLodsLog::NodeLodsLog(NodeLodsLog&& other) noexcept
     : file_(std::move(other.file_)),
       writer_(std::move(other.writer_)),
       fd_(std::exchange(other.fd_, -1)),
-      offsets_(std::move(other.offsets_)) {
+      index_file_(std::move(other.index_file_)),
+      index_fd_(std::exchange(other.index_fd_, -1)) {
   other.writer_.reset();
 }
 
 NodeLodsLog& NodeLodsLog::operator=(NodeLodsLog&& other) noexcept {
   if (this != &other) {
     if (fd_ >= 0) ::close(fd_);
+    if (index_fd_ >= 0) ::close(index_fd_);
     writer_.reset();  // before the file it writes is removed
     file_ = std::move(other.file_);
     writer_ = std::move(other.writer_);
     other.writer_.reset();
     fd_ = std::exchange(other.fd_, -1);
-    offsets_ = std::move(other.offsets_);
+    index_file_ = std::move(other.index_file_);
+    index_fd_ = std::exchange(other.index_fd_, -1);
   }
   return *this;
 }
 
 NodeLodsLog::~NodeLodsLog() {
   if (fd_ >= 0) ::close(fd_);
+  if (index_fd_ >= 0) ::close(index_fd_);
   writer_.reset();
+}
+
+Result<std::uint64_t> NodeLodsLog::stored_offset(std::int32_t node) const {
+  std::uint64_t stored = 0;
+  const off_t at = index_position(node);
+  const ssize_t got = ::pread(index_fd_, &stored, sizeof stored, at);
+  if (got == 0) return std::uint64_t{0};  // past the end: never written
+  if (got != static_cast<ssize_t>(sizeof stored))
+    return io_error(index_file_.path().string() + ": node " + std::to_string(node) + ": cannot read offset " +
+                    std::to_string(at) + (got < 0 ? std::string(": ") + std::strerror(errno) : ""));
+  return stored;
 }
 
 Status NodeLodsLog::append(std::int32_t node, const NodeShape& shape, const NodeLods& lods) {
   assert(writer_ && node >= 0 && !has(node) && lods.lods.size() <= kMaxLods);
-  const auto index = static_cast<std::size_t>(node);
-  if (offsets_.size() <= index) offsets_.resize(index + 1, kAbsent);
-  offsets_[index] = writer_->records_written();
+  const std::uint64_t stored = writer_->records_written() + 1;
+  const off_t at = index_position(node);
+  if (::pwrite(index_fd_, &stored, sizeof stored, at) != static_cast<ssize_t>(sizeof stored))
+    return io_error(index_file_.path().string() + ": cannot write at offset " + std::to_string(at) + ": " +
+                    std::strerror(errno));
   const RecordHeader header{shape.prefix, shape.triangles, shape.parent,  shape.depth,
                             shape.children, shape.leaf ? 1u : 0u, static_cast<std::uint32_t>(lods.lods.size()),
                             lods.bounds};
@@ -100,13 +124,18 @@ Status NodeLodsLog::finish() {
 }
 
 bool NodeLodsLog::has(std::int32_t node) const {
-  const auto index = static_cast<std::size_t>(node);
-  return node >= 0 && index < offsets_.size() && offsets_[index] != kAbsent;
+  if (node < 0) return false;
+  const Result<std::uint64_t> stored = stored_offset(node);
+  return stored.ok() && stored.value() != 0;
 }
 
 Result<LoggedNode> NodeLodsLog::read(std::int32_t node) const {
-  assert(fd_ >= 0 && has(node));
-  const std::uint64_t offset = offsets_[static_cast<std::size_t>(node)];
+  assert(fd_ >= 0 && node >= 0);
+  const Result<std::uint64_t> stored = stored_offset(node);
+  if (!stored.ok()) return stored.status();
+  if (stored.value() == 0)
+    return io_error(index_file_.path().string() + ": node " + std::to_string(node) + " was never recorded");
+  const std::uint64_t offset = stored.value() - 1;
   const auto read_at = [&](void* dst, std::size_t bytes, std::uint64_t at) -> Status {
     const ssize_t got = ::pread(fd_, dst, bytes, static_cast<off_t>(at));
     if (got == static_cast<ssize_t>(bytes)) return {};

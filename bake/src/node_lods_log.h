@@ -2,8 +2,8 @@
 // until the manifest is written (bake_pipeline.cpp): what the manifest says of the node. Held
 // in memory as NodeLods with their file names, they were about 1 KB of RSS per node to the end
 // of the bake: 219 MiB for the 212K nodes of a 100M-triangle rock at --memory 64M; the octree's
-// nodes held for the manifest were another 64 bytes each. The log holds 8 bytes per node (its
-// record's offset).
+// nodes held for the manifest were another 64 bytes each. The log holds nothing per node in
+// memory: each record's offset goes to a second work file, at the node's index.
 //
 // A record is the node's place in the tree (NodeShape), its bounds and, per LOD, its triangles,
 // vertices, error and bytes; file names are not stored, LOD i of the node is
@@ -15,7 +15,6 @@
 #include <cstdint>
 #include <filesystem>
 #include <optional>
-#include <vector>
 
 #include "lod_tree.h"
 #include "octolod/bake/temp_file.h"
@@ -70,10 +69,15 @@ class NodeLodsLog {
  private:
   NodeLodsLog() = default;
 
+  // The offset of node i's record + 1 at byte 8 i of the index file (0, or past its end: not
+  // appended).
+  Result<std::uint64_t> stored_offset(std::int32_t node) const;
+
   TempFile file_;
   std::optional<RecordWriter> writer_;  // until finish()
   int fd_ = -1;                         // for read(), after finish()
-  std::vector<std::uint64_t> offsets_;  // by node; kAbsent when not appended
+  TempFile index_file_;
+  int index_fd_ = -1;
 };
 
 }  // namespace octolod::bake
