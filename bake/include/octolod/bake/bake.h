@@ -35,9 +35,9 @@
 // the budget for each leaf at max_depth larger than
 // usual in work (each thread may hold one); a leaf at max_depth too large for that
 // quarter (max_depth_leaf_triangles) is built streaming from a temporary file within it.
-// Outside the budget, per octree node: 8 bytes (the offset of its record, which waits in a work
-// file until the manifest is written node by node from it; of the octree only the open path
-// is held). An
+// Nothing is held per octree node: a finished node's record waits in a work file (its offset
+// in another) until the manifest is written node by node from it, and of the octree only the
+// open path is held. An
 // internal node whose children's LODs are too large to merge in memory (near the root of a
 // large model) is clustered streaming from a file of them, like an oversize leaf.
 #pragma once
@@ -81,9 +81,8 @@ struct BakeOptions {
   std::uint32_t max_depth = 10;
   // Cap on the process's memory: program_bytes for what is not the bake's, the rest for the
   // bake's buffers together (soup stage, octree sort, leaf buffers, node work in flight,
-  // children's LODs kept for their parents). Not counted: 8 bytes per octree node, and
-  // the share of leaves at max_depth larger than max_tris + 1 (up to max_depth_leaf_triangles,
-  // in memory or streamed). Larger budgets mean fewer sorted runs and merges and, once the
+  // children's LODs kept for their parents). Not counted: the share of leaves at max_depth
+  // larger than max_tris + 1 (up to max_depth_leaf_triangles, in memory or streamed). Larger budgets mean fewer sorted runs and merges and, once the
   // vertices fit in half of it, the in-core soup path. At least program_bytes + kMinBakeBudget,
   // and enough for max_tris (the bake says how much when it is not; about 35 MiB with every
   // attribute at max_tris 2000, most of it for the largest node's simplification).
