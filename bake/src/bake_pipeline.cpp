@@ -74,7 +74,7 @@ Result<OctreeBudget> divide_octree_budget(const BakeOptions& options, VertexLayo
                                           unsigned workers) {
   // One leaf's records. The octree pass holds a candidate and a replay of one. Node work in
   // flight is limited to the largest node's estimate (lod_tree.h, max_node_work_bytes: an
-  // internal node merging up to twice merge_bytes, ~22 MB with the defaults), which the threads
+  // internal node merging up to twice merge_bytes, ~24 MB with the defaults), which the threads
   // share; without LODs a thread holds a leaf's records.
   const std::uint64_t leaf =
       (std::uint64_t{options.max_tris} + 1) * soup_record_bytes(layout);

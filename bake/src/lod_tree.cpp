@@ -111,7 +111,7 @@ Status interrupted() { return io_error("bake interrupted by a signal"); }
 // node_work_bytes = kNodeWorkFixed + kNodeWorkPerInputByte x input: the measurements in
 // lod_tree.h with some headroom (the fixed part covers small nodes' tables).
 constexpr std::size_t kNodeWorkFixed = 256 << 10;
-constexpr std::size_t kNodeWorkPerInputByte = 10;
+constexpr std::size_t kNodeWorkPerInputByte = 11;
 // The node work of a streamed node (its memory is bounded by its own limits, not its input):
 // it runs alone.
 constexpr std::size_t kRunsAlone = std::numeric_limits<std::size_t>::max();

@@ -104,10 +104,11 @@ std::size_t lod_mesh_bytes(const LodInfo& lod, VertexLayout layout);
 // Node work's heap high-water mark, estimated from its input: a leaf's soup records or an
 // internal node's merged LODs (lod_mesh_bytes), in bytes. The simplifier's working set (the
 // prepared node, clustering, quadrics, wedge tables, the LOD chain, the error bound's arrays) is
-// at most ~10 times its input: measured per node (heap of the thread, 1M and 10M rock, 60K
+// at most ~11 times its input: measured per node (heap of the thread, 1M and 10M rock, 60K
 // city at --max-tris 500 and 2000) 2.8x for full rock leaves, up to 9x for a city's small
 // leaves (two vertices per triangle), 5-10x for internal nodes (10.4x at 300 KB, 7.2x at 1.1
-// MB, 4.9x at 1.9 MB of merged input).
+// MB, 4.9x at 1.9 MB of merged input); on the 100M rock some mid-size internal nodes up to
+// 1.1x 256 KiB + 10x their input, hence 11.
 std::size_t node_work_bytes(std::size_t input_bytes);
 // The largest node_work_bytes of a tree with these limits: an internal node merges in memory
 // up to kStreamedMergeFactor x merge_bytes (more is built streaming); a leaf holds at most

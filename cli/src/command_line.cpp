@@ -48,7 +48,7 @@ void add_bake_command(CLI::App& app, CommandContext& context) {
   command
       ->add_option("--memory", args->memory,
                    "Peak memory (RSS) of the whole process: 48M, 64M, 1G (the program itself "
-                   "takes 8M of it; at least ~43M at --max-tris 2000 with every attribute, the "
+                   "takes 8M of it; at least ~46M at --max-tris 2000 with every attribute, the "
                    "bake says how much; up to a quarter more per leaf at --max-depth larger than "
                    "--max-tris)")
       ->capture_default_str();

@@ -84,7 +84,7 @@ struct BakeOptions {
   // children's LODs kept for their parents). Not counted: the share of leaves at max_depth
   // larger than max_tris + 1 (up to max_depth_leaf_triangles, in memory or streamed). Larger budgets mean fewer sorted runs and merges and, once the
   // vertices fit in half of it, the in-core soup path. At least program_bytes + kMinBakeBudget,
-  // and enough for max_tris (the bake says how much when it is not; about 35 MiB with every
+  // and enough for max_tris (the bake says how much when it is not; about 38 MiB with every
   // attribute at max_tris 2000, most of it for the largest node's simplification).
   std::uint64_t memory_budget_bytes = std::uint64_t{64} << 20;
   // The part of memory_budget_bytes the process holds besides the bake (its code, libraries,
