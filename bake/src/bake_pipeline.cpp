@@ -74,7 +74,8 @@ Result<OctreeBudget> divide_octree_budget(const BakeOptions& options, VertexLayo
                                           unsigned workers) {
   // One leaf's records. The octree pass holds a candidate and a replay of one. Node work in
   // flight is limited to the largest node's estimate (lod_tree.h, max_node_work_bytes: an
-  // internal node merging up to twice merge_bytes, ~24 MB with the defaults), which the threads
+  // internal node merging up to twice merge_bytes, ~24 MB with the defaults, or a leaf at
+  // max_depth as large as the budget keeps in memory, a quarter of it), which the threads
   // share; without LODs a thread holds a leaf's records.
   const std::uint64_t leaf =
       (std::uint64_t{options.max_tris} + 1) * soup_record_bytes(layout);
@@ -88,44 +89,37 @@ Result<OctreeBudget> divide_octree_budget(const BakeOptions& options, VertexLayo
       options.lods ? std::max(2 * leaf, options.memory_budget_bytes / 16) : 0);
   const std::uint64_t threads = workers + 1;  // the caller works too
   b.merge_bytes = 2 * b.queue_bytes;
+  const std::uint64_t largest_leaf =
+      max_depth_leaf_triangles(options.memory_budget_bytes, layout, options.max_tris) * soup_record_bytes(layout);
   const std::uint64_t work =
-      options.lods ? max_node_work_bytes(b.merge_bytes, static_cast<std::size_t>(leaf)) : threads * leaf;
+      options.lods ? max_node_work_bytes(b.merge_bytes, static_cast<std::size_t>(largest_leaf)) : threads * leaf;
   if (options.lods) b.work_bytes = static_cast<std::size_t>(work);
   const std::uint64_t reserve = b.io_bytes + (workers ? b.queue_bytes : 0) + b.keep_bytes + work + 2 * leaf;
   // the sort keeps at least a quarter of the budget
   if (reserve > options.memory_budget_bytes - options.memory_budget_bytes / 4) {
-    // reserve <= fixed + budget / 16 (the io buffer at its largest, the kept LODs at theirs),
-    // so any budget of at least 16/11 x fixed passes
-    const std::uint64_t fixed = (std::uint64_t{1} << 20) + (workers ? b.queue_bytes : 0) + 2 * leaf + work + 2 * leaf;
+    // reserve <= fixed + budget / 16 (the io buffer at its largest, the kept LODs at theirs)
+    // with the node work at its floor (the largest internal node or leaf of max_tris), so any
+    // budget of at least 16/11 x fixed passes, or 16/7 x (fixed - floor) where a quarter of the
+    // budget for a leaf at max_depth is the larger node work
+    const std::uint64_t floor = max_node_work_bytes(b.merge_bytes, static_cast<std::size_t>(leaf));
+    const std::uint64_t rest = (std::uint64_t{1} << 20) + (workers ? b.queue_bytes : 0) + 4 * leaf;
+    const std::uint64_t fixed = std::max(16 * (rest + floor) / 11, 16 * (rest + leaf_work_bytes(0)) / 7);
     return usage_error("memory budget of " + std::to_string((options.memory_budget_bytes + options.program_bytes) >> 20) +
                        " MiB is too small for --max-tris " + std::to_string(options.max_tris) +
                        " with layout " + layout.describe() + ": needs at least " +
-                       std::to_string(((16 * fixed / 11 + options.program_bytes) >> 20) + 1) +
+                       std::to_string(((fixed + options.program_bytes) >> 20) + 1) +
                        " MiB (a smaller --max-tris needs less)");
   }
   b.sort_bytes = options.memory_budget_bytes - reserve;
   return b;
 }
 
-// What a leaf costs in the LOD stage (lod_tree.h), per triangle, in soup records: the records,
-// the indexed NodeMesh, the simplifier's per-vertex quadrics and the LOD chain. Measured as the
-// slope of peak RSS (/usr/bin/time -v) between one leaf of 100K and one of 400K triangles
-// (--max-depth 0, --memory 16M): rocks 4.4 (every attribute, 0.5 vertices per triangle) to 9.2
-// (positions only) records per triangle, a city's boxes 13.6 (every attribute, 2 vertices per
-// triangle; 15.0 at --memory 4G, the in-memory octree's mesh included); bade2006 a third to a
-// half of that. The worst with some headroom: the cap must hold for any input.
-constexpr std::uint64_t kLeafCostInRecords = 16;
 // A leaf at max_depth, which cannot split, may cost up to 1 / kMaxDepthLeafShare of the budget
-// in the LOD stage: that many triangles (max_depth_leaf_triangles) are handed out in memory, a
-// larger leaf is spilled to a record file and built streaming (streamed_leaf.h: LOD 1 of at
-// most that many triangles and its chain cost about what an in-memory leaf of that size does,
-// the chunks it reads its records in a fraction of that). That share is not taken from the
-// others (the octree sort keeps its own, and with it the in-memory octree), so each such leaf in
-// work (one per thread at most) may take the bake up to that much above its usual peak: on the
-// 1M city at --memory 33M, leaves of up to 3968 triangles at --max-depth 4 (the cap: 3975)
-// peaked at 52 to 66 MiB in three runs (66: two at once), against 53 to 54 MiB at --max-depth
-// 10; the 1M rock at --memory 29M, leaves of up to 3473 at --max-depth 4 (cap 3494), 32 MiB as
-// at --max-depth 10.
+// in the LOD stage: that many triangles (max_depth_leaf_triangles, at kLeafWorkPerRecordByte,
+// lod_tree.h) are handed out in memory, a larger leaf is spilled to a record file and built
+// streaming (streamed_leaf.h: LOD 1 of at most that many triangles and its chain cost about
+// what an in-memory leaf of that size does, the chunks it reads its records in a fraction of
+// that; it runs alone). The node work reserve covers that share (divide_octree_budget).
 constexpr std::uint64_t kMaxDepthLeafShare = 4;
 // A streamed leaf's sorts (its records by triangle id, its edges) take 1 / this of the budget.
 constexpr std::uint64_t kStreamedSortShare = 16;
@@ -711,7 +705,7 @@ std::optional<ClusterMethod> parse_method(std::string_view name) {
 
 std::uint64_t max_depth_leaf_triangles(std::uint64_t memory_budget_bytes, VertexLayout layout,
                                        std::uint32_t max_tris) {
-  return std::max<std::uint64_t>(memory_budget_bytes / kMaxDepthLeafShare / (kLeafCostInRecords * soup_record_bytes(layout)),
+  return std::max<std::uint64_t>(memory_budget_bytes / kMaxDepthLeafShare / (kLeafWorkPerRecordByte * soup_record_bytes(layout)),
                                  std::uint64_t{max_tris} + 1);
 }
 

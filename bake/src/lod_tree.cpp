@@ -143,7 +143,7 @@ class LodTreeBuilder::Impl {
     s.triangles = task.weight;
     ++stats_.leaves;
     stats_.depth = std::max(stats_.depth, s.depth);
-    task.work = streamed.empty() ? node_work_bytes(records.size()) : kRunsAlone;  // a streamed leaf runs alone
+    task.work = streamed.empty() ? leaf_work_bytes(records.size()) : kRunsAlone;  // a streamed leaf runs alone
     queued_bytes_ += records.size();
     task.records = std::move(records);
     task.streamed = std::move(streamed);
@@ -612,8 +612,12 @@ std::size_t node_work_bytes(std::size_t input_bytes) {
   return kNodeWorkFixed + kNodeWorkPerInputByte * input_bytes;
 }
 
+std::size_t leaf_work_bytes(std::size_t record_bytes) {
+  return kNodeWorkFixed + kLeafWorkPerRecordByte * record_bytes;
+}
+
 std::size_t max_node_work_bytes(std::size_t merge_bytes, std::size_t leaf_record_bytes) {
-  return node_work_bytes(std::max(kStreamedMergeFactor * merge_bytes, leaf_record_bytes));
+  return std::max(node_work_bytes(kStreamedMergeFactor * merge_bytes), leaf_work_bytes(leaf_record_bytes));
 }
 
 std::vector<std::size_t> choose_merged_lods(const std::vector<std::vector<LodInfo>>& children,

@@ -101,18 +101,28 @@ struct LodTreeOptions {
 // Bytes of the NodeMesh of a LOD: its vertex floats and its indices.
 std::size_t lod_mesh_bytes(const LodInfo& lod, VertexLayout layout);
 
-// Node work's heap high-water mark, estimated from its input: a leaf's soup records or an
-// internal node's merged LODs (lod_mesh_bytes), in bytes. The simplifier's working set (the
-// prepared node, clustering, quadrics, wedge tables, the LOD chain, the error bound's arrays) is
-// at most ~11 times its input: measured per node (heap of the thread, 1M and 10M rock, 60K
-// city at --max-tris 500 and 2000) 2.8x for full rock leaves, up to 9x for a city's small
-// leaves (two vertices per triangle), 5-10x for internal nodes (10.4x at 300 KB, 7.2x at 1.1
-// MB, 4.9x at 1.9 MB of merged input); on the 100M rock some mid-size internal nodes up to
-// 1.1x 256 KiB + 10x their input, hence 11.
+// An internal node's work, its heap high-water mark, estimated from its merged LODs
+// (lod_mesh_bytes) in bytes. The simplifier's working set (the prepared node, clustering,
+// quadrics, wedge tables, the LOD chain, the error bound's arrays) is at most ~11 times its
+// input: measured per node (heap of the thread, 1M and 10M rock, 60K city at --max-tris 500 and
+// 2000) 5-10x (10.4x at 300 KB, 7.2x at 1.1 MB, 4.9x at 1.9 MB of merged input); on the 100M
+// rock some mid-size internal nodes up to 1.1x 256 KiB + 10x their input, hence 11.
 std::size_t node_work_bytes(std::size_t input_bytes);
-// The largest node_work_bytes of a tree with these limits: an internal node merges in memory
-// up to kStreamedMergeFactor x merge_bytes (more is built streaming); a leaf holds at most
-// leaf_record_bytes of records. What the bake reserves for node work (work_bytes).
+// A leaf's node work from its soup records, per record byte: the records, the indexed NodeMesh,
+// the simplifier's arrays and the LOD chain. Measured as the slope of peak RSS (/usr/bin/time
+// -v) between one leaf of 100K and one of 400K triangles (--max-depth 0, --memory 16M): rocks
+// 4.4 (every attribute, 0.5 vertices per triangle) to 9.2 (positions only) records per
+// triangle, a city's boxes 13.6 (every attribute, 2 vertices per triangle; 15.0 at --memory 4G,
+// the in-memory octree's mesh included); bade2006 a third to a half of that. The worst with
+// some headroom (a leaf at max_depth may be that large); leaves of max_tris take far less
+// (2.8x for a rock's, 9x for a city's).
+inline constexpr std::size_t kLeafWorkPerRecordByte = 16;
+// kNodeWorkFixed + kLeafWorkPerRecordByte x a leaf's record bytes.
+std::size_t leaf_work_bytes(std::size_t record_bytes);
+// The largest node work of a tree with these limits: an internal node merges in memory up to
+// kStreamedMergeFactor x merge_bytes (more is built streaming); a leaf holds at most
+// leaf_record_bytes of records in memory (larger ones are built streaming, alone). What the
+// bake reserves for node work (work_bytes).
 std::size_t max_node_work_bytes(std::size_t merge_bytes, std::size_t leaf_record_bytes);
 // Merged input past this many merge_bytes is built streaming (lod_tree.cpp, run_streamed_internal).
 inline constexpr std::size_t kStreamedMergeFactor = 2;

@@ -49,8 +49,7 @@ void add_bake_command(CLI::App& app, CommandContext& context) {
       ->add_option("--memory", args->memory,
                    "Peak memory (RSS) of the whole process: 48M, 64M, 1G (the program itself "
                    "takes 8M of it; at least ~46M at --max-tris 2000 with every attribute, the "
-                   "bake says how much; up to a quarter more per leaf at --max-depth larger than "
-                   "--max-tris)")
+                   "bake says how much)")
       ->capture_default_str();
   command->add_option("--work-dir", args->work_dir,
                       "Directory for temporary files (default: next to the output)");

@@ -31,10 +31,10 @@
 // many nodes at once as their estimated working sets fit the reserve for the largest one) and
 // the children's LODs kept for their parents share the budget less program_bytes; kept LODs
 // beyond their share are re-read from their files by the parent. Peak RSS stays within the
-// budget (with program_bytes covering the program's own footprint), plus up to a quarter of
-// the budget for each leaf at max_depth larger than
-// usual in work (each thread may hold one); a leaf at max_depth too large for that
-// quarter (max_depth_leaf_triangles) is built streaming from a temporary file within it.
+// budget (with program_bytes covering the program's own footprint); the node work reserve
+// covers a leaf at max_depth as large as a quarter of the budget can simplify in memory
+// (max_depth_leaf_triangles), and a larger one is built streaming from a temporary file,
+// alone, within that quarter.
 // Nothing is held per octree node: a finished node's record waits in a work file (its offset
 // in another) until the manifest is written node by node from it, and of the octree only the
 // open path is held. An
@@ -81,8 +81,8 @@ struct BakeOptions {
   std::uint32_t max_depth = 10;
   // Cap on the process's memory: program_bytes for what is not the bake's, the rest for the
   // bake's buffers together (soup stage, octree sort, leaf buffers, node work in flight,
-  // children's LODs kept for their parents). Not counted: the share of leaves at max_depth
-  // larger than max_tris + 1 (up to max_depth_leaf_triangles, in memory or streamed). Larger budgets mean fewer sorted runs and merges and, once the
+  // children's LODs kept for their parents, a leaf at max_depth larger than max_tris + 1, in
+  // memory or streamed). Larger budgets mean fewer sorted runs and merges and, once the
   // vertices fit in half of it, the in-core soup path. At least program_bytes + kMinBakeBudget,
   // and enough for max_tris (the bake says how much when it is not; about 38 MiB with every
   // attribute at max_tris 2000, most of it for the largest node's simplification).
@@ -133,10 +133,10 @@ inline constexpr std::uint64_t kCliProgramBytes = std::uint64_t{8} << 20;
 // vertices of `layout`, never fewer than max_tris + 1 (a leaf that small is always built in
 // memory): a quarter of the budget at
 // about 16 soup records of memory per triangle (its records, indexed mesh, simplification
-// arrays and LOD chain, measured on leaves of up to 400K triangles). That quarter comes on top
-// of the rest of the bake's buffers, for each such leaf in work; a larger leaf is built
-// streaming in chunks of this many triangles. Depends only on its arguments: the cap decides
-// how a leaf is built, never the tree.
+// arrays and LOD chain, measured on leaves of up to 400K triangles). The node work reserve
+// holds that quarter (the sort's share gives it up where it is larger than the largest
+// internal node's); a larger leaf is built streaming in chunks of this many triangles. Depends
+// only on its arguments: the cap decides how a leaf is built, never the tree.
 std::uint64_t max_depth_leaf_triangles(std::uint64_t memory_budget_bytes, VertexLayout layout,
                                        std::uint32_t max_tris);
 
