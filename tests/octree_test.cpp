@@ -114,6 +114,43 @@ BuiltTree build(const Stream& s, std::uint32_t max_tris, std::uint32_t max_depth
   return t;
 }
 
+// Forgetting finished nodes (the bake's mode): every node is seen held in the LeafFn call
+// after its creation, with its parent, prefix and depth; what stays held is the open path (at
+// most one node per level and the leaf); size() keeps counting every node; the leaves are the
+// same as when the tree is kept whole.
+TEST(OctreeBuilder, ForgettingFinishedNodesKeepsOnlyTheOpenPathAndTheSameLeaves) {
+  Stream s;
+  for (std::uint64_t k : {001u, 001u, 005u, 005u, 032u, 060u, 067u}) s.add(k);
+  const BuiltTree whole = build(s, 2, 2, 3);
+  std::map<std::int32_t, std::vector<std::uint64_t>> leaves;
+  std::size_t seen = 0;
+  OctreeBuilder* self = nullptr;
+  OctreeBuilder builder(2, 2, 8, 0, [&](std::int32_t node, std::vector<std::byte>&& records) {
+    const OctreeNodes& nodes = self->nodes();
+    for (; seen < nodes.size(); ++seen) {
+      EXPECT_TRUE(nodes.holds(seen)) << "node " << seen << " forgotten before it was seen";
+      if (!nodes.holds(seen)) continue;
+      EXPECT_EQ(nodes[seen].parent, whole.nodes[seen].parent);
+      EXPECT_EQ(nodes[seen].prefix, whole.nodes[seen].prefix);
+      EXPECT_EQ(nodes[seen].depth, whole.nodes[seen].depth);
+    }
+    EXPECT_LE(nodes.held(), 2u + 1u) << "more than the open path and the leaf";
+    for (std::size_t i = 0; i < records.size(); i += 8) {
+      std::uint64_t id;
+      std::memcpy(&id, records.data() + i, 8);
+      leaves[node].push_back(id);
+    }
+    return Status{};
+  });
+  self = &builder;
+  builder.forget_finished_nodes();
+  ASSERT_TRUE(builder.push(s.records, s.keys).ok());
+  ASSERT_TRUE(builder.finish().ok());
+  EXPECT_EQ(builder.nodes().size(), whole.nodes.size());
+  EXPECT_EQ(builder.nodes().held(), 0u);
+  EXPECT_EQ(leaves, whole.leaves);
+}
+
 //  depth 2, keys = 2 levels (6 bits): octant of level 1 in bits 3..5, level 2 in bits 0..2.
 //  root (7 records, max_tris 2) splits; child 0 holds 4 -> splits into 0/1 (2), 0/5 (2);
 //  child 3 holds 1 (leaf); child 6 holds 2 (leaf).
@@ -132,10 +169,13 @@ TEST(OctreeBuilder, SplitsNodesOverMaxTrisAndHandsOutEveryRecordOnce) {
     EXPECT_EQ(t.nodes[3].path(), "0/5");
     EXPECT_EQ(t.nodes[4].path(), "3");
     EXPECT_EQ(t.nodes[5].path(), "6");
-    const NodeChildren children(t.nodes);
-    EXPECT_EQ(children.of(0), (std::array<std::int32_t, 8>{1, -1, -1, 4, -1, -1, 5, -1}));
-    EXPECT_EQ(children.of(1), (std::array<std::int32_t, 8>{-1, 2, -1, -1, -1, 3, -1, -1}));
-    EXPECT_EQ(children.of(4), (std::array<std::int32_t, 8>{-1, -1, -1, -1, -1, -1, -1, -1}));
+    // children by their parent links, octant = the last 3 bits of the prefix
+    std::map<std::int32_t, std::map<std::uint64_t, std::int32_t>> children;
+    for (std::size_t i = 1; i < t.nodes.size(); ++i)
+      children[t.nodes[i].parent][t.nodes[i].prefix & 7u] = static_cast<std::int32_t>(i);
+    EXPECT_EQ(children[0], (std::map<std::uint64_t, std::int32_t>{{0, 1}, {3, 4}, {6, 5}}));
+    EXPECT_EQ(children[1], (std::map<std::uint64_t, std::int32_t>{{1, 2}, {5, 3}}));
+    EXPECT_EQ(children.count(4), 0u);
     EXPECT_EQ(t.nodes[3].parent, 1);
     const std::map<std::int32_t, std::vector<std::uint64_t>> expected{
         {2, {0, 1}}, {3, {2, 3}}, {4, {4}}, {5, {5, 6}}};

@@ -214,25 +214,6 @@ Status OctreeBuilder::close_candidate() {
   return handed;
 }
 
-NodeChildren::NodeChildren(const OctreeNodes& nodes) : nodes_(nodes), first_(nodes.size() + 1, 0) {
-  for (std::size_t i = 0; i < nodes.size(); ++i)
-    if (nodes[i].parent >= 0) ++first_[static_cast<std::size_t>(nodes[i].parent) + 1];
-  for (std::size_t i = 0; i < nodes.size(); ++i) first_[i + 1] += first_[i];
-  child_.resize(first_.back());
-  std::vector<std::uint32_t> fill(first_.begin(), first_.end() - 1);
-  // children in index order, which is octant order (depth-first, key order)
-  for (std::size_t i = 0; i < nodes.size(); ++i)
-    if (nodes[i].parent >= 0) child_[fill[static_cast<std::size_t>(nodes[i].parent)]++] = static_cast<std::int32_t>(i);
-}
-
-std::array<std::int32_t, 8> NodeChildren::of(std::size_t node) const {
-  std::array<std::int32_t, 8> children;
-  children.fill(-1);
-  for (std::uint32_t k = first_[node]; k < first_[node + 1]; ++k)
-    children[nodes_[static_cast<std::size_t>(child_[k])].prefix & 7u] = child_[k];
-  return children;
-}
-
 Status OctreeBuilder::finish() {
   if (candidate_ >= 0) OCTOLOD_RETURN_IF_ERROR(close_candidate());
   if (forget_) {

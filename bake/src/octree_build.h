@@ -34,7 +34,7 @@
 
 namespace octolod::bake {
 
-// A node's children are the nodes whose parent it is (NodeChildren), octant = prefix & 7.
+// A node's children are the nodes whose parent it is, octant = prefix & 7.
 struct OctreeNode {
   std::uint64_t prefix = 0;  // octant path from the root, 3 bits per level (morton.h)
   std::uint64_t triangles = 0;  // in the subtree (complete after finish())
@@ -53,6 +53,7 @@ class OctreeNodes {
   std::size_t size() const { return count_; }
   bool empty() const { return count_ == 0; }
   bool holds(std::size_t i) const { return held_.count(i) != 0; }
+  std::size_t held() const { return held_.size(); }
   const OctreeNode& operator[](std::size_t i) const { return held_.at(i); }
   OctreeNode& operator[](std::size_t i) { return held_.at(i); }
   const OctreeNode& back() const { return held_.at(count_ - 1); }
@@ -64,18 +65,6 @@ class OctreeNodes {
   std::size_t count_ = 0;
 };
 
-// Every node's children by octant (-1 where none), from the parent links of a tree whose nodes
-// are all held: a transient index (CSR, 8 bytes per node).
-class NodeChildren {
- public:
-  explicit NodeChildren(const OctreeNodes& nodes);
-  std::array<std::int32_t, 8> of(std::size_t node) const;
-
- private:
-  const OctreeNodes& nodes_;
-  std::vector<std::uint32_t> first_;  // node i's children are child_[first_[i] .. first_[i+1])
-  std::vector<std::int32_t> child_;
-};
 
 // Receives a finished leaf: its node index and its records in leaf order (ownership passes).
 using LeafFn = std::function<Status(std::int32_t node, std::vector<std::byte>&& records)>;
