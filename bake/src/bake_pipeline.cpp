@@ -70,6 +70,9 @@ struct OctreeBudget {
   std::uint64_t sort_bytes = 0;
 };
 
+// Node work threads besides the caller, for `threads` in all (the caller works too).
+unsigned lod_workers(unsigned threads) { return threads > 1 ? threads - 1 : 0; }
+
 Result<OctreeBudget> divide_octree_budget(const BakeOptions& options, VertexLayout layout,
                                           unsigned workers) {
   // One leaf's records. The octree pass holds a candidate and a replay of one. Node work in
@@ -177,7 +180,7 @@ class OctreeInput {
 
   const RootCube& cube() const { return cube_; }
   const OctreeBudget& budget() const { return budget_; }
-  unsigned workers() const { return threads_ > 1 ? threads_ - 1 : 0; }
+  unsigned workers() const { return lod_workers(threads_); }
   bool streamed() const { return file_.empty(); }  // no soup file was written
   const fs::path& work() const { return work_; }
 
@@ -432,7 +435,7 @@ Result<OctreeResult> build_octree_from_mesh(const BakeOptions& options, unsigned
                                             const fs::path& work) {
   OctreeResult result;
   result.cube = RootCube::around(mesh.bounds);
-  const unsigned workers = threads > 1 ? threads - 1 : 0;
+  const unsigned workers = lod_workers(threads);
   auto budget = divide_octree_budget(options, mesh.layout, workers);
   if (!budget.ok()) return budget.status();
   const std::size_t n = mesh.triangles.size() / 3;
@@ -590,7 +593,7 @@ Result<BakeReport> run_bake(const BakeOptions& given) {
     header_only.buffer_bytes = 4096;
     auto reader = PlyReader::open(options.input, header_only);
     if (!reader.ok()) return reader.status();
-    auto budget = divide_octree_budget(options, reader.value()->info().layout, threads > 1 ? threads - 1 : 0);
+    auto budget = divide_octree_budget(options, reader.value()->info().layout, lod_workers(threads));
     if (!budget.ok()) return budget.status();
   }
   remove_stale_temp_dirs(parent);

@@ -61,7 +61,6 @@ struct Slot {
   std::uint64_t prefix = 0;  // octant path (octree_build.h), its last octant the one in the parent
   std::int32_t parent = -1;
   std::uint32_t depth = 0;
-  std::uint32_t children = 0;
   std::array<std::int32_t, 8> child{-1, -1, -1, -1, -1, -1, -1, -1};  // node indices by octant
   bool leaf = false;
   std::uint64_t triangles = 0;  // the subtree's: a leaf's own, then its delivered children's
@@ -71,12 +70,27 @@ struct Slot {
   // Allocated by the first delivery, taken by the node's task: only pending parents hold one
   // (a tree of 100M triangles has 212K nodes).
   std::unique_ptr<Pending> pending;
+
+  // An internal node is ready once it is closed and every child it has is done.
+  bool ready() const {
+    return closed && done == static_cast<std::uint32_t>(std::count_if(child.begin(), child.end(),
+                                                                      [](std::int32_t c) { return c >= 0; }));
+  }
+};
+
+// The LODs an internal node merges: one index per present child into its chain (octant order),
+// their lod_mesh_bytes and their largest error.
+struct MergePlan {
+  std::vector<std::size_t> chosen;
+  std::size_t bytes = 0;
+  double input_error = 0;
 };
 
 struct Task {
   std::int32_t node = -1;
   std::uint64_t weight = 0;  // input triangles
   std::size_t work = 0;      // node_work_bytes within LodTreeOptions::work_bytes; 0 without a limit
+  MergePlan merge;           // an internal node's, planned when it became ready
   std::vector<std::byte> records;  // a leaf's soup records; empty for an internal node
   TempFile streamed;               // a streamed leaf's records instead (add_streamed_leaf)
   bool leaf = false;
@@ -229,9 +243,7 @@ class LodTreeBuilder::Impl {
       s.depth = n.depth;
       slots_.emplace(static_cast<std::int32_t>(i), std::move(s));
       if (n.parent >= 0) {  // registered before it: a lower index
-        Slot& p = slot(n.parent);
-        ++p.children;
-        p.child[n.prefix & 7u] = static_cast<std::int32_t>(i);
+        slot(n.parent).child[n.prefix & 7u] = static_cast<std::int32_t>(i);
       }
     }
     registered_ = nodes.size();
@@ -258,7 +270,7 @@ class LodTreeBuilder::Impl {
   void close(std::int32_t node) {
     Slot& s = slot(node);
     s.closed = true;
-    if (s.done == s.children) push_internal(node);
+    if (s.ready()) push_internal(node);
   }
 
   void push_internal(std::int32_t node) {
@@ -266,8 +278,9 @@ class LodTreeBuilder::Impl {
     Task task;
     task.node = node;
     task.weight = s.child_triangles;
-    const std::size_t input = options_.build_lods && s.pending ? plan_merge(s.pending->child).bytes : 0;
+    if (options_.build_lods && s.pending) task.merge = plan_merge(s.pending->child);
     // a merge too large for memory is built streaming, alone
+    const std::size_t input = task.merge.bytes;
     task.work = input > kStreamedMergeFactor * merge_bytes_ ? kRunsAlone : node_work_bytes(input);
     push(std::move(task));
   }
@@ -308,7 +321,7 @@ class LodTreeBuilder::Impl {
     const std::size_t record_bytes = task.records.size();
     const auto start = Clock::now();
     Result<NodeDone> done = task.leaf ? run_leaf(task, dir, cell, scratch)
-                                      : run_internal(children, dir, cell);
+                                      : run_internal(children, task.merge, dir, cell);
     std::size_t released = 0;
     std::uint64_t rereads = 0;
     for (ChildLod& c : children) {
@@ -376,13 +389,7 @@ class LodTreeBuilder::Impl {
     return done;
   }
 
-  // The LODs an internal node merges: choose_merged_lods over its present children (octant
-  // order), their lod_mesh_bytes and their largest error.
-  struct MergePlan {
-    std::vector<std::size_t> chosen;
-    std::size_t bytes = 0;
-    double input_error = 0;
-  };
+  // An internal node's MergePlan: choose_merged_lods over its present children.
   MergePlan plan_merge(const std::array<ChildLod, 8>& children) const {
     std::vector<std::vector<LodInfo>> chains;
     for (const ChildLod& c : children)
@@ -399,11 +406,11 @@ class LodTreeBuilder::Impl {
     return plan;
   }
 
-  Result<NodeDone> run_internal(std::array<ChildLod, 8>& children, const std::string& dir,
-                                const Bounds& cell) {
+  Result<NodeDone> run_internal(std::array<ChildLod, 8>& children, const MergePlan& plan,
+                                const std::string& dir, const Bounds& cell) {
     if (cleanup_signal_received()) return interrupted();
     if (!options_.build_lods) return NodeDone{};
-    const auto [chosen, merged_bytes, input_error] = plan_merge(children);
+    const auto& [chosen, merged_bytes, input_error] = plan;
     if (merged_bytes > kStreamedMergeFactor * merge_bytes_) {
       auto streamed = run_streamed_internal(children, chosen, input_error, dir, cell);
       if (!streamed.ok() || !streamed->lods.lods.empty()) return streamed;
@@ -558,7 +565,7 @@ class LodTreeBuilder::Impl {
         }
       }
     }
-    if (p.closed && p.done == p.children) push_internal(parent);
+    if (p.ready()) push_internal(parent);
   }
 
   void work() {

@@ -40,7 +40,8 @@
 // internal node's input is at most twice merge_bytes of mesh), and the children's finest LODs
 // kept for their pending parents up to keep_bytes; past that, or when the parent merges a coarser one, the
 // parent reads the child's file (identical bytes). A finished node's records go to a work file
-// (node_lods_log.h) and its scheduler slot is dropped: what stays per node is 8 bytes of log.
+// (node_lods_log.h, its offset in another) and its scheduler slot is dropped: nothing stays per
+// node.
 #pragma once
 
 #include <cstddef>

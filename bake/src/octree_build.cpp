@@ -78,7 +78,7 @@ void OctreeBuilder::open_candidate(std::uint64_t key) {
   while (!open_.empty()) {
     const OctreeNode& n = nodes_[static_cast<std::size_t>(open_.back())];
     if (prefix_of(key, n.depth) == n.prefix) break;
-    if (forget_) nodes_.forget(static_cast<std::size_t>(open_.back()));
+    finished(open_.back());
     open_.pop_back();
   }
   if (open_.empty()) {
@@ -145,7 +145,7 @@ Status OctreeBuilder::settle(std::int32_t node, std::size_t begin, std::size_t e
       OCTOLOD_RETURN_IF_ERROR(settle(new_child(node, buffer_keys_[first]), first, last));
       first = last;
     }
-    if (forget_) nodes_.forget(static_cast<std::size_t>(node));
+    finished(node);
     return {};
   }
   std::vector<std::byte> records(buffer_.begin() + static_cast<std::ptrdiff_t>(begin * record_bytes_),
@@ -161,7 +161,7 @@ Status OctreeBuilder::hand_out_leaf(std::int32_t node, std::vector<std::byte>&& 
   n.triangles = keys.size();
   if (record_bytes_ > 0) order_equal_keys(records, keys);
   OCTOLOD_RETURN_IF_ERROR(on_leaf_(node, std::move(records)));
-  if (forget_) nodes_.forget(static_cast<std::size_t>(node));
+  finished(node);
   return {};
 }
 
@@ -204,7 +204,7 @@ Status OctreeBuilder::close_candidate() {
     n.triangles = spilled_;
     spilled_ = 0;
     OCTOLOD_RETURN_IF_ERROR(spill_.finish(leaf));
-    if (forget_) nodes_.forget(static_cast<std::size_t>(leaf));
+    finished(leaf);
     return {};
   }
   std::vector<std::byte> records = std::move(buffer_);
@@ -214,10 +214,14 @@ Status OctreeBuilder::close_candidate() {
   return handed;
 }
 
+void OctreeBuilder::finished(std::int32_t node) {
+  if (forget_) nodes_.forget(static_cast<std::size_t>(node));
+}
+
 Status OctreeBuilder::finish() {
   if (candidate_ >= 0) OCTOLOD_RETURN_IF_ERROR(close_candidate());
   if (forget_) {
-    for (std::int32_t node : open_) nodes_.forget(static_cast<std::size_t>(node));
+    for (std::int32_t node : open_) finished(node);
     open_.clear();
     return {};
   }

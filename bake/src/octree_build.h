@@ -20,7 +20,6 @@
 // centroid; empty octants get no node.
 #pragma once
 
-#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <functional>
@@ -64,7 +63,6 @@ class OctreeNodes {
   std::unordered_map<std::size_t, OctreeNode> held_;
   std::size_t count_ = 0;
 };
-
 
 // Receives a finished leaf: its node index and its records in leaf order (ownership passes).
 using LeafFn = std::function<Status(std::int32_t node, std::vector<std::byte>&& records)>;
@@ -123,6 +121,8 @@ class OctreeBuilder {
                    std::size_t count);
   Status hand_out_leaf(std::int32_t node, std::vector<std::byte>&& records,
                        std::span<const std::uint64_t> keys);
+  // Node `node` is finished and handed on: dropped under forget_finished_nodes().
+  void finished(std::int32_t node);
   void order_equal_keys(std::vector<std::byte>& records, std::span<const std::uint64_t> keys) const;
   std::uint64_t prefix_of(std::uint64_t key, std::uint32_t depth) const {
     return key >> (3 * (max_depth_ - depth));
