@@ -104,10 +104,13 @@ ClusteredMesh cluster_grid(const PreparedNode& node, std::uint32_t g);
 // grid for the target (choose_grid_resolution) instead; when even the coarsest grid is over the
 // target (the locked boundary dominates) nothing is halved: the caller sees the count.
 Clustering adaptive_grid_clustering(const PreparedNode& node, std::size_t target);
-// Triangles cluster_grid(node, g) would keep (before the rare drop of triangles whose corners
-// coincide after rounding), without solving any quadric: what the resolution search evaluates.
+// Triangles of the node whose corners fall in three distinct clusters of cluster_grid(node, g),
+// without solving any quadric: what the resolution searches evaluate. cluster_grid keeps at
+// most that many (one or two copies per cluster triple of one or more of them, wedges.h), and
+// nearly as many: on 1M rock and city bakes the count is on average 0.2% and 1.2% (at most 8% and
+// 29%) above the triangles kept, so a search within it is within the target.
 std::size_t count_grid_triangles(const PreparedNode& node, std::uint32_t g);
-// The resolution whose output has at most `target` triangles and is as fine as a short search
+// The resolution whose count_grid_triangles is at most `target` and is as fine as a short search
 // finds (at most 12 counts; it stops within 15% below the target; the count is nearly but not
 // exactly monotone in g); 1 when even g = 1 exceeds it.
 std::uint32_t choose_grid_resolution(const PreparedNode& node, std::size_t target);

@@ -144,20 +144,18 @@ std::size_t coarsest_count_bound(const PreparedNode& node) {
   return count;
 }
 
-// Triangles the clustering given by per-vertex cluster ids keeps (before the rare drop of
-// triangles whose corners coincide after rounding): build_clustered_mesh's rule per cluster
-// triple (KeptTriangleCounter), without solving any quadric.
-std::size_t count_kept_triangles(const PreparedNode& node, const std::vector<std::uint32_t>& cluster) {
-  KeptTriangleCounter<3> counter(node.mesh().triangle_count());
-  for (std::size_t t = 0; t < node.mesh().triangle_count(); ++t) {
-    const std::uint32_t* corner = &node.mesh().indices[3 * t];
-    const std::uint32_t c0 = cluster[corner[0]], c1 = cluster[corner[1]], c2 = cluster[corner[2]];
-    if (c0 == c1 || c1 == c2 || c0 == c2) continue;
-    std::array<std::uint32_t, 3> triple{c0, c1, c2};
-    std::sort(triple.begin(), triple.end());
-    counter.add(triple, winds_like_sorted(c0, c1, c2));
+// Triangles whose corners have three distinct cluster ids (or keys) `id` (per vertex): the
+// sources build_clustered_mesh groups per cluster triple, an upper bound of what it keeps
+// (count_grid_triangles). No table of the triples: a pass over the indices.
+template <class Id>
+std::size_t count_surviving_triangles(const PreparedNode& node, const std::vector<Id>& id) {
+  std::size_t count = 0;
+  const std::uint32_t* corner = node.mesh().indices.data();
+  for (std::size_t t = 0; t < node.mesh().triangle_count(); ++t, corner += 3) {
+    const Id a = id[corner[0]], b = id[corner[1]], c = id[corner[2]];
+    count += a != b && b != c && a != c;
   }
-  return counter.kept();
+  return count;
 }
 
 // The clustering of per-vertex keys of `coarse` (and of `fine` where kFineKey is set): clusters
@@ -220,7 +218,7 @@ std::vector<std::uint32_t> clusters_by_error(const PreparedNode& node, const std
 }  // namespace
 
 std::size_t count_grid_triangles(const PreparedNode& node, std::uint32_t g) {
-  return count_kept_triangles(node, dense_ids(vertex_keys(node, make_domain(node, g)), false).first);
+  return count_surviving_triangles(node, vertex_keys(node, make_domain(node, g)));
 }
 
 std::uint32_t next_search_resolution(std::uint32_t g, std::size_t count, std::size_t target, std::uint32_t lo,
@@ -328,7 +326,7 @@ Clustering adaptive_grid_clustering(const PreparedNode& node, std::size_t target
   auto count_with = [&](std::size_t halved_count) {
     for (std::size_t v = 0; v < ids.size(); ++v)
       ids[v] = rank[coarse_id[v]] < halved_count ? first_fine + fine_id[v] : coarse_id[v];
-    return count_kept_triangles(node, ids);
+    return count_surviving_triangles(node, ids);
   };
   // The most halved clusters whose output stays within the target. The count grows with them,
   // nearly monotonically and about linearly: interpolation between a feasible and an infeasible
