@@ -107,7 +107,7 @@ void run(samplegen::Shape shape, std::uint64_t triangles, int repeat) {
     const bake::PreparedNode prepared = bake::prepare_node(node.mesh, node.cell);
     prepare_best = std::min(prepare_best, seconds_since(start));
     start = Clock::now();
-    const bake::Clustering clustering = bake::adaptive_grid_clustering(prepared, target);
+    const bake::Clustering clustering = bake::adaptive_grid_clustering(prepared, target, bake::SearchCount::surviving);
     search_best = std::min(search_best, seconds_since(start));
     start = Clock::now();
     const bake::ClusteredMesh clustered = bake::build_clustered_mesh(prepared.mesh(), prepared.face_normal, clustering, prepared.origin);

@@ -744,6 +744,33 @@ TEST(SimplifyTest, GridBeatsBade2006OnRmsAtAboutEqualCount) {
   EXPECT_LT(grid_rms, seed_rms);
 }
 
+TEST(SimplifyTest, SurvivingCountBoundsTheKeptTrianglesClosely) {
+  // The searches' fast count (SearchCount::surviving: corners in three distinct clusters) is an
+  // upper bound of the output rule's count, which is what cluster_grid keeps (less the rare
+  // triangles whose corners coincide after rounding); on the rock it is within a few percent.
+  // The city's boxes fold into few cells: many surviving triangles share a triple there.
+  for (const samplegen::Shape shape : {samplegen::Shape::rock, samplegen::Shape::city}) {
+    const NodeMesh input = make_sample(shape, 20'000);
+    const PreparedNode prepared = prepare_node(input, input.bounds());
+    for (const std::uint32_t g : {3u, 8u, 21u, 55u}) {
+      const std::size_t kept = count_grid_triangles(prepared, g, SearchCount::kept);
+      const std::size_t surviving = count_grid_triangles(prepared, g, SearchCount::surviving);
+      EXPECT_GE(surviving, kept) << "g " << g;
+      EXPECT_GE(kept, cluster_grid(prepared, g).mesh.triangle_count()) << "g " << g;
+      EXPECT_GT(cluster_grid(prepared, g).mesh.triangle_count(), kept * 95 / 100) << "g " << g;
+      if (shape == samplegen::Shape::rock) {
+        EXPECT_LE(surviving, kept * 105 / 100) << "g " << g;
+      }
+    }
+    // a search with the fast count stays within the target and says what it counted
+    const std::size_t target = input.triangle_count() / 4;
+    const Clustering clustering = adaptive_grid_clustering(prepared, target, SearchCount::surviving);
+    const ClusteredMesh clustered = build_clustered_mesh(prepared.mesh(), prepared.face_normal, clustering, prepared.origin);
+    EXPECT_LE(clustering.counted_triangles, target);
+    EXPECT_LE(clustered.mesh.triangle_count(), clustering.counted_triangles);
+  }
+}
+
 TEST(SimplifyTest, AdaptiveGridBeatsTheUniformGridOnRms) {
   // The grid for a target halves the cells where the surface bends most (cluster.h,
   // adaptive_grid_clustering); a uniform grid at the resolution search's answer for the same

@@ -145,8 +145,7 @@ std::size_t coarsest_count_bound(const PreparedNode& node) {
 }
 
 // Triangles whose corners have three distinct cluster ids (or keys) `id` (per vertex): the
-// sources build_clustered_mesh groups per cluster triple, an upper bound of what it keeps
-// (count_grid_triangles). No table of the triples: a pass over the indices.
+// sources build_clustered_mesh groups per cluster triple (SearchCount::surviving).
 template <class Id>
 std::size_t count_surviving_triangles(const PreparedNode& node, const std::vector<Id>& id) {
   std::size_t count = 0;
@@ -156,6 +155,22 @@ std::size_t count_surviving_triangles(const PreparedNode& node, const std::vecto
     count += a != b && b != c && a != c;
   }
   return count;
+}
+
+// Triangles the clustering given by per-vertex cluster ids keeps (before the rare drop of
+// triangles whose corners coincide after rounding): build_clustered_mesh's rule per cluster
+// triple (KeptTriangleCounter), without solving any quadric.
+std::size_t count_kept_triangles(const PreparedNode& node, const std::vector<std::uint32_t>& cluster) {
+  KeptTriangleCounter<3> counter(node.mesh().triangle_count());
+  for (std::size_t t = 0; t < node.mesh().triangle_count(); ++t) {
+    const std::uint32_t* corner = &node.mesh().indices[3 * t];
+    const std::uint32_t c0 = cluster[corner[0]], c1 = cluster[corner[1]], c2 = cluster[corner[2]];
+    if (c0 == c1 || c1 == c2 || c0 == c2) continue;
+    std::array<std::uint32_t, 3> triple{c0, c1, c2};
+    std::sort(triple.begin(), triple.end());
+    counter.add(triple, winds_like_sorted(c0, c1, c2));
+  }
+  return counter.kept();
 }
 
 // The clustering of per-vertex keys of `coarse` (and of `fine` where kFineKey is set): clusters
@@ -217,8 +232,10 @@ std::vector<std::uint32_t> clusters_by_error(const PreparedNode& node, const std
 
 }  // namespace
 
-std::size_t count_grid_triangles(const PreparedNode& node, std::uint32_t g) {
-  return count_surviving_triangles(node, vertex_keys(node, make_domain(node, g)));
+std::size_t count_grid_triangles(const PreparedNode& node, std::uint32_t g, SearchCount count) {
+  const std::vector<std::uint64_t> keys = vertex_keys(node, make_domain(node, g));
+  return count == SearchCount::surviving ? count_surviving_triangles(node, keys)
+                                         : count_kept_triangles(node, dense_ids(keys, false).first);
 }
 
 std::uint32_t next_search_resolution(std::uint32_t g, std::size_t count, std::size_t target, std::uint32_t lo,
@@ -241,7 +258,7 @@ struct GridChoice {
   std::size_t count;
 };
 
-GridChoice search_grid_resolution(const PreparedNode& node, std::size_t target) {
+GridChoice search_grid_resolution(const PreparedNode& node, std::size_t target, SearchCount rule) {
   // Triangles grow about like g^2 on a surface. First guess from the area: a surface crosses
   // about 1.5 A / s^2 cubes of side s, and a closed mesh has about 2 triangles per vertex.
   // Then power-law corrections through the last count, keeping a feasible lower and an
@@ -251,7 +268,7 @@ GridChoice search_grid_resolution(const PreparedNode& node, std::size_t target) 
   const std::size_t coarsest_bound = coarsest_count_bound(node);
   std::optional<std::size_t> coarsest;
   auto count_coarsest = [&] {
-    if (!coarsest) coarsest = count_grid_triangles(node, 1);
+    if (!coarsest) coarsest = count_grid_triangles(node, 1, rule);
     return *coarsest;
   };
   if (coarsest_bound > target && count_coarsest() > target) return {1, *coarsest};
@@ -271,7 +288,7 @@ GridChoice search_grid_resolution(const PreparedNode& node, std::size_t target) 
   std::size_t best_count = 0;
   for (int evaluation = 0; evaluation < 12 && hi - lo > 1; ++evaluation) {
     g = std::clamp(g, lo + 1, hi - 1);
-    const std::size_t count = count_grid_triangles(node, g);
+    const std::size_t count = count_grid_triangles(node, g, rule);
     if (count <= target) lo = g;
     else hi = g;
     if (count <= target && count > best_count) best = g, best_count = count;
@@ -286,8 +303,8 @@ GridChoice search_grid_resolution(const PreparedNode& node, std::size_t target) 
 
 }  // namespace
 
-std::uint32_t choose_grid_resolution(const PreparedNode& node, std::size_t target) {
-  return search_grid_resolution(node, target).g;
+std::uint32_t choose_grid_resolution(const PreparedNode& node, std::size_t target, SearchCount count) {
+  return search_grid_resolution(node, target, count).g;
 }
 
 namespace {
@@ -304,10 +321,16 @@ ClusteredMesh cluster_grid(const PreparedNode& node, std::uint32_t g) {
   return build_clustered_mesh(node.mesh(), node.face_normal, uniform_clustering(node, g), node.origin);
 }
 
-Clustering adaptive_grid_clustering(const PreparedNode& node, std::size_t target) {
-  const GridChoice choice = search_grid_resolution(node, static_cast<std::size_t>(kCoarseShare * static_cast<double>(target)));
+Clustering adaptive_grid_clustering(const PreparedNode& node, std::size_t target, SearchCount rule) {
+  const GridChoice choice =
+      search_grid_resolution(node, static_cast<std::size_t>(kCoarseShare * static_cast<double>(target)), rule);
   const std::uint32_t g = choice.g;
-  if (g < kMinAdaptiveResolution) return uniform_clustering(node, choose_grid_resolution(node, target));
+  if (g < kMinAdaptiveResolution) {
+    const GridChoice uniform = search_grid_resolution(node, target, rule);
+    Clustering clustering = uniform_clustering(node, uniform.g);
+    clustering.counted_triangles = uniform.count;
+    return clustering;
+  }
   const GridDomain coarse = make_domain(node, g);
   const GridDomain fine = halved(coarse);
   const std::vector<std::uint64_t> coarse_keys = vertex_keys(node, coarse);
@@ -326,7 +349,7 @@ Clustering adaptive_grid_clustering(const PreparedNode& node, std::size_t target
   auto count_with = [&](std::size_t halved_count) {
     for (std::size_t v = 0; v < ids.size(); ++v)
       ids[v] = rank[coarse_id[v]] < halved_count ? first_fine + fine_id[v] : coarse_id[v];
-    return count_surviving_triangles(node, ids);
+    return rule == SearchCount::surviving ? count_surviving_triangles(node, ids) : count_kept_triangles(node, ids);
   };
   // The most halved clusters whose output stays within the target. The count grows with them,
   // nearly monotonically and about linearly: interpolation between a feasible and an infeasible
@@ -351,7 +374,9 @@ Clustering adaptive_grid_clustering(const PreparedNode& node, std::size_t target
   }
   for (std::size_t v = 0; v < fine_keys.size(); ++v)
     if (rank[coarse_id[v]] >= feasible) fine_keys[v] = coarse_keys[v];
-  return clustering_from_keys(fine_keys, coarse, fine);
+  Clustering clustering = clustering_from_keys(fine_keys, coarse, fine);
+  clustering.counted_triangles = feasible_count;
+  return clustering;
 }
 
 }  // namespace octolod::bake

@@ -33,6 +33,22 @@ Status check_mesh(const NodeMesh& mesh) {
   return {};
 }
 
+// When the kept triangles fall below this share of what the search counted, the surviving
+// triangles overestimated them (many share cluster triples: a city's boxes) and the search runs
+// again with the exact count.
+constexpr double kRecountShare = 0.9;
+
+// The grid method for a wanted triangle count: the adaptive grid searched with the fast count
+// (SearchCount::surviving), again with the exact one where that ended far below the target.
+ClusteredMesh cluster_for_target(const PreparedNode& node, std::size_t target) {
+  const Clustering fast = adaptive_grid_clustering(node, target, SearchCount::surviving);
+  ClusteredMesh clustered = build_clustered_mesh(node.mesh(), node.face_normal, fast, node.origin);
+  if (static_cast<double>(clustered.mesh.triangle_count()) >= kRecountShare * static_cast<double>(fast.counted_triangles))
+    return clustered;
+  return build_clustered_mesh(node.mesh(), node.face_normal, adaptive_grid_clustering(node, target, SearchCount::kept),
+                              node.origin);
+}
+
 }  // namespace
 
 PreparedNode prepare_node(const NodeMesh& mesh, const Bounds& cell) {
@@ -64,10 +80,8 @@ Result<SimplifyResult> simplify_node(const NodeMesh& input, const Bounds& cell,
   if (options.method == ClusterMethod::bade2006) {
     result.mesh = cluster_bade2006(node);
   } else {
-    ClusteredMesh clustered =
-        options.target_triangles > 0
-            ? build_clustered_mesh(node.mesh(), node.face_normal, adaptive_grid_clustering(node, options.target_triangles), node.origin)
-            : cluster_grid(node, options.grid_resolution);
+    ClusteredMesh clustered = options.target_triangles > 0 ? cluster_for_target(node, options.target_triangles)
+                                                           : cluster_grid(node, options.grid_resolution);
     result.mesh = std::move(clustered.mesh);
     result.error_bound = hausdorff_upper_bound(node.mesh(), result.mesh, clustered.hints());
     return result;
