@@ -686,6 +686,40 @@ TEST(SimplifyTest, GridKeepsAThinSheetTwoSided) {
 
 // ---- grid quality ---------------------------------------------------------------------------
 
+// Two triangles whose corners fall in the same three clusters with opposite windings: A, and
+// either A reversed (a sheet of zero thickness: the two windings face away from each other) or
+// a triangle B in the same plane facing the same way as A, its corners at other places in the
+// cells (the clustering folds the surface across the triple). Positions only, three unit cells
+// along x.
+ClusteredMesh cluster_two_windings(bool b_faces_away) {
+  NodeMesh mesh;
+  mesh.layout = VertexLayout{false, false, false};
+  const float a[3][3] = {{0.5f, 0.1f, 0.0f}, {1.5f, 0.1f, 0.0f}, {2.5f, 0.9f, 0.0f}};
+  // B's corners in clusters 0, 2, 1, in that order
+  const float away[3][3] = {{0.5f, 0.1f, 0.0f}, {2.5f, 0.9f, 0.0f}, {1.5f, 0.1f, 0.0f}};
+  const float same[3][3] = {{0.5f, 0.9f, 0.0f}, {2.5f, 0.1f, 0.0f}, {1.5f, 0.9f, 0.0f}};
+  for (const auto& corner : a) mesh.vertices.insert(mesh.vertices.end(), corner, corner + 3);
+  for (const auto& corner : b_faces_away ? away : same) mesh.vertices.insert(mesh.vertices.end(), corner, corner + 3);
+  mesh.indices = {0, 1, 2, 3, 4, 5};
+  Clustering clustering;
+  clustering.of_vertex = {0, 1, 2, 0, 2, 1};
+  clustering.count = 3;
+  clustering.locked.assign(3, 0);
+  for (int c = 0; c < 3; ++c) clustering.box.push_back({{c + 0.0, 0.0, -1.0}, {c + 1.0, 1.0, 1.0}});
+  return build_clustered_mesh(mesh, face_normals(mesh), clustering, {0.0, 0.0, 0.0});
+}
+
+TEST(SimplifyTest, GridKeepsAPairOnlyWhereItsSidesFaceAway) {
+  // Both windings of one cluster triple cancel mod 2; the output keeps them as a two-sided pair
+  // for a thin sheet (GridKeepsAThinSheetTwoSided), not where both sides face the same way: a
+  // pair there would be a fin standing out of the surface.
+  const ClusteredMesh sheet = cluster_two_windings(true);
+  EXPECT_EQ(sheet.mesh.triangle_count(), 2u);
+  EXPECT_TRUE(odd_edges(sheet.mesh).empty());
+  const ClusteredMesh fold = cluster_two_windings(false);
+  EXPECT_EQ(fold.mesh.triangle_count(), 0u);
+}
+
 TEST(SimplifyTest, GridOutputIsCleanWithinTargetAndNotFlipped) {
   for (const samplegen::Shape shape : {samplegen::Shape::rock, samplegen::Shape::city}) {
     const NodeMesh input = make_sample(shape, 20'000);

@@ -21,7 +21,7 @@
 //          the mesh's edges, which streaming cannot hold), each wedge the area-weighted mean of
 //          its corners' attributes (normals renormalized, colours clamped). Triangles whose
 //          corners fall in three distinct clusters survive as build_clustered_mesh's rule keeps
-//          them (kept_copies per cluster triple: once when odd, a two-sided pair for a folded
+//          them (kept_copies per cluster triple: once when odd, a two-sided pair for a thin
 //          sheet), with the wedges of a source triangle. The resolution is searched by counting passes
 //          (a resolution whose distinct cluster triples pass twice the limit counts as too
 //          fine, so memory stays bounded by the limit) for at most min(max_lod1_triangles,
