@@ -350,6 +350,31 @@ TEST(QuadricTest, LinearAttributesInterpolateExactly) {
   }
 }
 
+TEST(QuadricTest, TriangleFreeBlockEqualsTheQuadricsFreeBlock) {
+  // What the clustering's attribute solves add per solved corner (add_triangle_free_block) is
+  // the triangle's whole quadric reduced to its attribute block with the position fixed
+  // (add_free_block), for every attribute count.
+  for (const int n : {4, 6, 8, 9, 11}) {
+    double p[11], q[11], r[11];
+    for (int i = 0; i < n; ++i) {
+      p[i] = 0.3 * std::sin(1.0 + i), q[i] = 0.9 * std::cos(2.0 * i) + 0.2, r[i] = 0.5 * std::sin(3.0 * i + 0.5) - 0.1;
+    }
+    const double x[3] = {0.25, -0.4, 0.7};
+    const std::size_t size = free_block_doubles(n - 3);
+    double quadric[kMaxQuadricDoubles];
+    triangle_quadric(n, p, q, r, 1.3, quadric);
+    std::vector<double> expected(size, 0.0), block(size, 0.0);
+    add_free_block(n, 3, quadric, x, expected.data());
+    TriangleFreePart part;
+    ASSERT_TRUE(triangle_free_part(n, p, q, r, 1.3, part));
+    add_triangle_free_block(part, x, block.data());
+    for (std::size_t i = 0; i < size; ++i) EXPECT_NEAR(block[i], expected[i], 1e-12) << "n " << n << " entry " << i;
+    // degenerate in R^n (q = p) or weightless: nothing to add, as the quadric is zero
+    EXPECT_FALSE(triangle_free_part(n, p, p, r, 1.3, part));
+    EXPECT_FALSE(triangle_free_part(n, p, q, r, 0.0, part));
+  }
+}
+
 TEST(QuadricTest, RankDeficientMinimizerIsNearestTheMean) {
   double q[kMaxQuadricDoubles], sum[kMaxQuadricDoubles] = {};
   // one plane z = 1 (rank 1): the minimizer nearest the mean is the mean projected on the plane

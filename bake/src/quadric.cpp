@@ -176,35 +176,34 @@ void solve_nearest(int m, Matrix& mat, const double* rhs, const double* x0, doub
 
 namespace {
 
+// The orthonormal basis (e1, e2) of the plane of the triangle (p, q, r) in R^n (quadric.h);
+// false when the triangle is degenerate in R^n (coincident or collinear corners).
+template <int n>
+bool plane_basis(const double* p, const double* q, const double* r, double* e1, double* e2) {
+  for (int i = 0; i < n; ++i) e1[i] = q[i] - p[i];
+  const double len1 = std::sqrt(dot(n, e1, e1));
+  if (!(len1 > 0.0)) return false;
+  for (int i = 0; i < n; ++i) e1[i] /= len1;
+  Vector rp{};
+  for (int i = 0; i < n; ++i) rp[static_cast<std::size_t>(i)] = r[i] - p[i];
+  const double along = dot(n, e1, rp.data());
+  for (int i = 0; i < n; ++i) e2[i] = rp[static_cast<std::size_t>(i)] - along * e1[i];
+  const double len2 = std::sqrt(dot(n, e2, e2));
+  // Collinear in R^n: no plane. Relative test, so tiny well-shaped triangles still count.
+  if (!(len2 > 1e-12 * len1)) return false;
+  for (int i = 0; i < n; ++i) e2[i] /= len2;
+  return true;
+}
+
 // triangle_quadric for a dimension known at compile time: the loops unroll and vectorize.
 template <int n>
 void triangle_quadric_fixed(const double* p, const double* q, const double* r, double weight, double* out) {
   constexpr std::size_t count = quadric_doubles(n);
-  if (weight <= 0.0) {
-    std::fill(out, out + count, 0.0);
-    return;
-  }
   Vector e1{}, e2{};
-  for (int i = 0; i < n; ++i) e1[static_cast<std::size_t>(i)] = q[i] - p[i];
-  const double len1 = std::sqrt(dot(n, e1.data(), e1.data()));
-  if (!(len1 > 0.0)) {
+  if (weight <= 0.0 || !plane_basis<n>(p, q, r, e1.data(), e2.data())) {
     std::fill(out, out + count, 0.0);
     return;
   }
-  for (int i = 0; i < n; ++i) e1[static_cast<std::size_t>(i)] /= len1;
-  Vector rp{};
-  for (int i = 0; i < n; ++i) rp[static_cast<std::size_t>(i)] = r[i] - p[i];
-  const double along = dot(n, e1.data(), rp.data());
-  for (int i = 0; i < n; ++i)
-    e2[static_cast<std::size_t>(i)] = rp[static_cast<std::size_t>(i)] - along * e1[static_cast<std::size_t>(i)];
-  const double len2 = std::sqrt(dot(n, e2.data(), e2.data()));
-  // Collinear in R^n: no plane. Relative test, so tiny well-shaped triangles still count.
-  if (!(len2 > 1e-12 * len1)) {
-    std::fill(out, out + count, 0.0);
-    return;
-  }
-  for (int i = 0; i < n; ++i) e2[static_cast<std::size_t>(i)] /= len2;
-
   double* a = out;  // packed upper triangle, row by row
   for (int i = 0; i < n; ++i) {
     const double w1 = weight * e1[static_cast<std::size_t>(i)], w2 = weight * e2[static_cast<std::size_t>(i)];
@@ -221,7 +220,56 @@ void triangle_quadric_fixed(const double* p, const double* q, const double* r, d
   out[count - 1] = weight * (dot(n, p, p) - pe1 * pe1 - pe2 * pe2);
 }
 
+// triangle_free_part for a dimension known at compile time.
+template <int n>
+bool triangle_free_part_fixed(const double* p, const double* q, const double* r, double weight, TriangleFreePart& part) {
+  if (weight <= 0.0 || !plane_basis<n>(p, q, r, part.e1, part.e2)) return false;
+  constexpr int m = n - 3;
+  part.n = n;
+  part.weight = weight;
+  part.pe1 = dot(n, p, part.e1);
+  part.pe2 = dot(n, p, part.e2);
+  for (int i = 0; i < m; ++i) part.p_free[i] = p[3 + i];
+  double* a = part.a_ff;  // A's rows 3..n-1 from the diagonal: weight (I - e1 e1^T - e2 e2^T)
+  for (int i = 3; i < n; ++i) {
+    const double w1 = weight * part.e1[i], w2 = weight * part.e2[i];
+    *a++ = weight - w1 * part.e1[i] - w2 * part.e2[i];
+    for (int j = i + 1; j < n; ++j) *a++ = -w1 * part.e1[j] - w2 * part.e2[j];
+  }
+  return true;
+}
+
+template <int n>
+void add_triangle_free_block_fixed(const TriangleFreePart& part, const double* x, double* acc) {
+  constexpr int m = n - 3;
+  constexpr int ff = m * (m + 1) / 2;
+  for (int i = 0; i < ff; ++i) acc[i] += part.a_ff[i];
+  // b_f + A_fx x = weight ((p.e1 - e1_x.x) e1_f + (p.e2 - e2_x.x) e2_f - p_f): A's identity part
+  // has no position-attribute entries
+  const double s1 = part.pe1 - (part.e1[0] * x[0] + part.e1[1] * x[1] + part.e1[2] * x[2]);
+  const double s2 = part.pe2 - (part.e2[0] * x[0] + part.e2[1] * x[1] + part.e2[2] * x[2]);
+  double* rhs = acc + ff;
+  for (int i = 0; i < m; ++i) rhs[i] += part.weight * (s1 * part.e1[3 + i] + s2 * part.e2[3 + i] - part.p_free[i]);
+}
+
 }  // namespace
+
+bool triangle_free_part(int n, const double* p, const double* q, const double* r, double weight,
+                        TriangleFreePart& part) {
+  assert(n > 3 && n <= kMaxQuadricDim && "a free part needs attributes (n = 4..11)");
+  return with_fixed_dimension(n, [&](auto fixed) {
+    constexpr int dimension = decltype(fixed)::value;
+    if constexpr (dimension > 3) return triangle_free_part_fixed<dimension>(p, q, r, weight, part);
+    else return false;
+  });
+}
+
+void add_triangle_free_block(const TriangleFreePart& part, const double* x, double* acc) {
+  with_fixed_dimension(part.n, [&](auto fixed) {
+    constexpr int dimension = decltype(fixed)::value;
+    if constexpr (dimension > 3) add_triangle_free_block_fixed<dimension>(part, x, acc);
+  });
+}
 
 void triangle_quadric(int n, const double* p, const double* q, const double* r, double weight,
                       double* out) {

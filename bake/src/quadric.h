@@ -73,6 +73,26 @@ void minimize_quadric_free_tail(int n, int k, const double* q, const double* mea
 constexpr std::size_t free_block_doubles(int m) { return static_cast<std::size_t>(m * (m + 1) / 2 + m); }
 // acc += the free block of q (dimension n) with the first k coordinates fixed at x.
 void add_free_block(int n, int k, const double* q, const double* x, double* acc);
+// A triangle's quadric as the attribute solves of a clustering need it, with the position
+// (coordinates 0..2) fixed per corner: add_triangle_free_block(part, x, acc) adds exactly what
+// triangle_quadric(n, p, q, r, weight) followed by add_free_block(n, 3, ..., x, acc) adds (up to
+// rounding), without forming the quadric's position rows, once per solved corner.
+struct TriangleFreePart {
+  int n = 0;
+  double weight = 0.0;
+  double e1[kMaxQuadricDim];  // the orthonormal basis of the triangle's plane in R^n
+  double e2[kMaxQuadricDim];
+  double pe1 = 0.0, pe2 = 0.0;                          // p . e1, p . e2
+  double p_free[kMaxQuadricDim - 3];                    // p's attribute coordinates
+  // weight (I - e1 e1^T - e2 e2^T): its attribute rows from the diagonal, packed
+  double a_ff[(kMaxQuadricDim - 3) * (kMaxQuadricDim - 2) / 2];
+};
+// Fills `part` for the triangle (p, q, r) in R^n (n = 4..11); false (nothing to add) where
+// triangle_quadric writes zeros: weight 0 or a degenerate triangle in R^n.
+bool triangle_free_part(int n, const double* p, const double* q, const double* r, double weight,
+                        TriangleFreePart& part);
+// acc (free_block_doubles(n - 3) doubles) += the part's free block with the position fixed at x.
+void add_triangle_free_block(const TriangleFreePart& part, const double* x, double* acc);
 // minimize_quadric_free_tail from a free block of m = n - k coordinates: writes the m free ones.
 void minimize_free_block(int m, const double* block, const double* mean_free, double* free);
 

@@ -321,7 +321,7 @@ ClusteredMesh build_clustered_mesh(const NodeMesh& mesh, std::span<const std::ar
 
   // attribute quadrics, once the positions are known: every triangle's generalized quadric
   // (Garland & Heckbert 1998) added to the wedge of each of its solved corners as the block
-  // the attribute solve needs with the wedge's position fixed (quadric.h, add_free_block: 44
+  // the attribute solve needs with the wedge's position fixed (quadric.h, add_triangle_free_block: 44
   // doubles per wedge with every attribute instead of the 78 of a whole quadric). The blocks
   // are summed and solved a window of wedges at a time, one pass over the triangles per window
   // (each block still sums its triangles in triangle order): the working set holds the blocks
@@ -354,15 +354,15 @@ ClusteredMesh build_clustered_mesh(const NodeMesh& mesh, std::span<const std::ar
         local_vertex(corner[k], p[k]);
         for (int i = 0; i < 3; ++i) p[k][i] *= position_scale;
       }
-      double quadric_n[kMaxQuadricDoubles];
-      triangle_quadric(n, p[0], p[1], p[2], area, quadric_n);
+      TriangleFreePart part;
+      if (!triangle_free_part(n, p[0], p[1], p[2], area, part)) continue;
       for (int k = 0; k < 3; ++k) {
         const std::uint32_t v = corner[k];
         if (!in_window(v)) continue;
         const std::uint32_t slot = slot_of_wedge[wedge[v]];
         double x[3];
         for (int i = 0; i < 3; ++i) x[i] = cluster_position[cluster[v] * 3 + static_cast<std::size_t>(i)] * position_scale;
-        add_free_block(n, 3, quadric_n, x, &window_block[(slot - first_slot) * block_size]);
+        add_triangle_free_block(part, x, &window_block[(slot - first_slot) * block_size]);
       }
     }
   };
