@@ -921,6 +921,24 @@ constexpr std::uint64_t kBoundedRockTriangles = 40'000;
 constexpr std::uint64_t kBoundedRockSamples = 40'000;
 #endif
 
+// The one-sided Hausdorff distance from `input` to `lod` as measured: Metro sampling
+// (kBoundedRockSamples) plus the exact distances of the input vertices, which sampling misses
+// and where the distance to the LOD peaks.
+double measured_hausdorff(const NodeMesh& input, const NodeMesh& lod) {
+  measure::MetroOptions metro;
+  metro.samples = kBoundedRockSamples;
+  const auto report = measure::evaluate(input, lod, metro);
+  EXPECT_TRUE(report.ok());
+  double measured = report.ok() ? report->a_to_b.max : std::numeric_limits<double>::infinity();
+  const measure::TriangleBvh bvh(lod.vertices, lod.layout.floats(), lod.indices);
+  const std::size_t stride = input.layout.floats();
+  for (std::size_t v = 0; v < input.vertex_count(); ++v) {
+    const float* f = &input.vertices[v * stride];
+    measured = std::max(measured, static_cast<double>(bvh.closest(glm::vec3(f[0], f[1], f[2])).distance));
+  }
+  return measured;
+}
+
 TEST(LodTest, EveryLodErrorBoundsTheMeasuredHausdorff) {
   const NodeMesh rock = make_sample(samplegen::Shape::rock, kBoundedRockTriangles);
   Bounds cube = rock.bounds();
@@ -933,19 +951,7 @@ TEST(LodTest, EveryLodErrorBoundsTheMeasuredHausdorff) {
     double worst_ratio = 0.0, first_ratio = 0.0;
     for (std::size_t k = 1; k < lods->size(); ++k) {
       const Lod& lod = lods.value()[k];
-      measure::MetroOptions metro;
-      metro.samples = kBoundedRockSamples;
-      const auto report = measure::evaluate(node.mesh, lod.mesh, metro);
-      ASSERT_TRUE(report.ok());
-      // sampling misses the corners, where the distance to the LOD peaks: add exact distances
-      // of the input vertices
-      double measured = report->a_to_b.max;
-      const measure::TriangleBvh bvh(lod.mesh.vertices, lod.mesh.layout.floats(), lod.mesh.indices);
-      const std::size_t stride = node.mesh.layout.floats();
-      for (std::size_t v = 0; v < node.mesh.vertex_count(); ++v) {
-        const float* f = &node.mesh.vertices[v * stride];
-        measured = std::max(measured, static_cast<double>(bvh.closest(glm::vec3(f[0], f[1], f[2])).distance));
-      }
+      const double measured = measured_hausdorff(node.mesh, lod.mesh);
       std::printf("[ info ] LOD %zu: %zu tris, stored error %.5f, measured one-sided Hausdorff %.5f, ratio %.2f\n", k,
                   lod.mesh.triangle_count(), lod.error, measured, lod.error / measured);
       EXPECT_LE(measured, lod.error) << "LOD " << k;
@@ -963,6 +969,25 @@ TEST(LodTest, EveryLodErrorBoundsTheMeasuredHausdorff) {
     EXPECT_LE(first_ratio, 8.0) << "one step's bound is too loose";
     EXPECT_LE(worst_ratio, 16.0) << "the bound is too loose to drive the runtime's LOD choice";
   }
+}
+
+TEST(LodTest, RootChainSimplifiesTheBorderOfAnOpenSurface) {
+  // A terrain is open: its border edges are used by one triangle. A node keeps its boundary so
+  // that neighbouring nodes meet; the root has no neighbours (lod_tree.h), and without the lock
+  // its chain goes on to min_triangles instead of stopping at the border's fans. Every LOD's
+  // error still bounds the measured distance from the input.
+  const NodeMesh terrain = make_sample(samplegen::Shape::terrain, 8'000);
+  LodOptions locked, unlocked;
+  unlocked.lock_boundary = false;
+  auto kept = build_lods(terrain, 0.0, terrain.bounds(), locked);
+  auto free = build_lods(terrain, 0.0, terrain.bounds(), unlocked);
+  ASSERT_TRUE(kept.ok() && free.ok());
+  std::printf("[ info ] terrain %zu tris: chain ends at %zu tris with its border locked, %zu without\n",
+              terrain.triangle_count(), kept->back().mesh.triangle_count(), free->back().mesh.triangle_count());
+  EXPECT_GT(kept->back().mesh.triangle_count(), locked.min_triangles);
+  EXPECT_LE(free->back().mesh.triangle_count(), unlocked.min_triangles);
+  for (std::size_t k = 1; k < free->size(); ++k)
+    EXPECT_LE(measured_hausdorff(terrain, free.value()[k].mesh), free.value()[k].error) << "LOD " << k;
 }
 
 TEST(LodTest, ChainHalvesEachStepAndStopsNearMinTriangles) {

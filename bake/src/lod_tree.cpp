@@ -320,8 +320,10 @@ class LodTreeBuilder::Impl {
 
     const std::size_t record_bytes = task.records.size();
     const auto start = Clock::now();
-    Result<NodeDone> done = task.leaf ? run_leaf(task, dir, cell, scratch)
-                                      : run_internal(children, task.merge, dir, cell);
+    // the root has no neighbours to meet: its boundary is the mesh's own border
+    const bool lock_boundary = s.depth > 0;
+    Result<NodeDone> done = task.leaf ? run_leaf(task, dir, cell, lock_boundary, scratch)
+                                      : run_internal(children, task.merge, dir, cell, lock_boundary);
     std::size_t released = 0;
     std::uint64_t rereads = 0;
     for (ChildLod& c : children) {
@@ -348,11 +350,11 @@ class LodTreeBuilder::Impl {
     work_.notify_all();
   }
 
-  Result<NodeDone> run_leaf(Task& task, const std::string& dir, const Bounds& cell,
+  Result<NodeDone> run_leaf(Task& task, const std::string& dir, const Bounds& cell, bool lock_boundary,
                             Scratch& scratch) {
     if (cleanup_signal_received()) return interrupted();
     OCTOLOD_RETURN_IF_ERROR(make_directory(dir));
-    if (!task.streamed.empty()) return run_streamed_leaf(task, dir, cell);
+    if (!task.streamed.empty()) return run_streamed_leaf(task, dir, cell, lock_boundary);
     NodeMesh mesh;
     scratch.indexer.index(task.records, options_.layout, mesh);
     task.records = {};  // the queue's bytes are given back in run_one
@@ -363,17 +365,19 @@ class LodTreeBuilder::Impl {
     }
     LodOptions o = options_.lod;
     o.include_input = true;
+    o.lock_boundary = lock_boundary;
     auto lods = build_lods(std::move(mesh), 0.0, cell, o);
     if (!lods.ok()) return lods.status();
     return write_lods(dir, lods.value());
   }
 
-  Result<NodeDone> run_streamed_leaf(Task& task, const std::string& dir, const Bounds& cell) {
+  Result<NodeDone> run_streamed_leaf(Task& task, const std::string& dir, const Bounds& cell, bool lock_boundary) {
     StreamedLeafOptions o;
     o.layout = options_.layout;
     o.cell = cell;
     o.build_lods = options_.build_lods;
     o.lod = options_.lod;
+    o.lod.lock_boundary = lock_boundary;  // the chain after LOD 1 (which keeps it)
     o.chunk_triangles = options_.streamed_chunk_triangles;
     o.max_lod1_triangles = options_.streamed_max_lod1_triangles;
     o.work_dir = options_.work_dir;
@@ -407,12 +411,12 @@ class LodTreeBuilder::Impl {
   }
 
   Result<NodeDone> run_internal(std::array<ChildLod, 8>& children, const MergePlan& plan,
-                                const std::string& dir, const Bounds& cell) {
+                                const std::string& dir, const Bounds& cell, bool lock_boundary) {
     if (cleanup_signal_received()) return interrupted();
     if (!options_.build_lods) return NodeDone{};
     const auto& [chosen, merged_bytes, input_error] = plan;
     if (merged_bytes > kStreamedMergeFactor * merge_bytes_) {
-      auto streamed = run_streamed_internal(children, chosen, input_error, dir, cell);
+      auto streamed = run_streamed_internal(children, chosen, input_error, dir, cell, lock_boundary);
       if (!streamed.ok() || !streamed->lods.lods.empty()) return streamed;
     }
     std::vector<const NodeMesh*> meshes;
@@ -426,6 +430,7 @@ class LodTreeBuilder::Impl {
     for (ChildLod& c : children) c.mesh = {};
     LodOptions o = options_.lod;
     o.include_input = false;
+    o.lock_boundary = lock_boundary;
     auto lods = build_lods(std::move(merged), input_error, cell, o);
     if (!lods.ok()) return lods.status();
     return write_lods(dir, lods.value());
@@ -448,7 +453,7 @@ class LodTreeBuilder::Impl {
   // then merges in memory).
   Result<NodeDone> run_streamed_internal(std::array<ChildLod, 8>& children,
                                          const std::vector<std::size_t>& chosen, double input_error,
-                                         const std::string& dir, const Bounds& cell) {
+                                         const std::string& dir, const Bounds& cell, bool lock_boundary) {
     TempFile records = make_temp_file(options_.work_dir, "merged-children");
     const std::size_t record_bytes = soup_record_bytes(options_.layout);
     {
@@ -478,6 +483,7 @@ class LodTreeBuilder::Impl {
     o.layout = options_.layout;
     o.cell = cell;
     o.lod = options_.lod;
+    o.lod.lock_boundary = lock_boundary;  // the chain after LOD 1 (which keeps it)
     o.chunk_triangles = limit;
     o.max_lod1_triangles = limit;
     o.work_dir = options_.work_dir;

@@ -51,12 +51,13 @@ ClusteredMesh cluster_for_target(const PreparedNode& node, std::size_t target) {
 
 }  // namespace
 
-PreparedNode prepare_node(const NodeMesh& mesh, const Bounds& cell) {
+PreparedNode prepare_node(const NodeMesh& mesh, const Bounds& cell, bool lock_boundary) {
   PreparedNode node;
   node.input = &mesh;
   node.welded = weld_if_needed(mesh);
   node.positions = make_position_ids(node.mesh());
-  node.boundary = find_boundary(node.mesh(), node.positions);
+  if (lock_boundary) node.boundary = find_boundary(node.mesh(), node.positions);
+  else node.boundary.locked_position.assign(node.positions.count, 0);
   node.cell = cell;
   node.mesh_bounds = node.mesh().bounds();
   node.face_normal = face_normals(node.mesh());
@@ -76,7 +77,8 @@ Result<SimplifyResult> simplify_node(const NodeMesh& input, const Bounds& cell,
   result.mesh.layout = input.layout;
   if (input.triangle_count() == 0) return result;
 
-  const PreparedNode node = prepare_node(input, cell);
+  const PreparedNode node =
+      prepare_node(input, cell, options.lock_boundary || options.method == ClusterMethod::bade2006);
   if (options.method == ClusterMethod::bade2006) {
     result.mesh = cluster_bade2006(node);
   } else {

@@ -57,6 +57,11 @@ struct SimplifyOptions {
   // out of their cell). Used when
   // target_triangles == 0; must then be >= 1. Higher = finer, more triangles.
   std::uint32_t grid_resolution = 0;
+  // grid only: keep the node's boundary edges (used by one of its triangles) unchanged, so the
+  // LODs of neighbouring nodes meet without cracks. false for a node without neighbours, the
+  // root, whose boundary is the mesh's own border (an open surface's, a terrain's): it is then
+  // clustered like the interior. bade2006 always keeps it (its operator fans it).
+  bool lock_boundary = true;
 };
 
 struct SimplifyResult {
@@ -103,6 +108,8 @@ struct LodOptions {
   // times smaller); when even that fails (or the input is already at most min_triangles), LOD 0
   // is the input itself, so an internal node always gets at least one LOD.
   bool include_input = true;
+  // SimplifyOptions::lock_boundary of every step: false only for the root.
+  bool lock_boundary = true;
 };
 
 struct Lod {
