@@ -34,8 +34,9 @@ enum class ClusterMethod {
   // Lindstrom-style: a grid of cubic cells inside the node, one quadric-optimal representative
   // per cell (inside its cell), locked boundary vertices are their own clusters, triangles whose
   // three corners land in three distinct clusters survive (once per cluster triple when their
-  // number is odd; twice, wound both ways, when it is even and both windings occur: a thin sheet
-  // such as a wall whose two faces share cells stays, two-sided). For a wanted triangle count the grid
+  // number is odd; twice, wound both ways, when it is even and both windings occur facing away
+  // from each other: a thin sheet such as a wall whose two faces share cells stays, two-sided,
+  // while a smooth surface the cells fold is not doubled into a fin). For a wanted triangle count the grid
   // is adaptive: a coarser grid whose cells with the highest quadric error per area (where the
   // surface bends inside the cell) are halved, as many as the count allows. The default.
   grid,
