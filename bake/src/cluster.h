@@ -112,7 +112,7 @@ enum class SearchCount { surviving, kept };
 // the result depends only on the node. Below 8 coarse cells along the longest side, the uniform
 // grid for the target (choose_grid_resolution) instead; when even the coarsest grid is over the
 // target (the locked boundary dominates) nothing is halved: the caller sees the count. Counts as
-// `count` says; the result's counted_triangles is the search's count for it.
+// `count` says.
 Clustering adaptive_grid_clustering(const PreparedNode& node, std::size_t target, SearchCount count);
 // Triangles cluster_grid(node, g) would keep (before the rare drop of triangles whose corners
 // coincide after rounding), or an upper bound of them (`surviving`), without solving any

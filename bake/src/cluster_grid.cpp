@@ -326,10 +326,7 @@ Clustering adaptive_grid_clustering(const PreparedNode& node, std::size_t target
       search_grid_resolution(node, static_cast<std::size_t>(kCoarseShare * static_cast<double>(target)), rule);
   const std::uint32_t g = choice.g;
   if (g < kMinAdaptiveResolution) {
-    const GridChoice uniform = search_grid_resolution(node, target, rule);
-    Clustering clustering = uniform_clustering(node, uniform.g);
-    clustering.counted_triangles = uniform.count;
-    return clustering;
+    return uniform_clustering(node, search_grid_resolution(node, target, rule).g);
   }
   const GridDomain coarse = make_domain(node, g);
   const GridDomain fine = halved(coarse);
@@ -374,9 +371,7 @@ Clustering adaptive_grid_clustering(const PreparedNode& node, std::size_t target
   }
   for (std::size_t v = 0; v < fine_keys.size(); ++v)
     if (rank[coarse_id[v]] >= feasible) fine_keys[v] = coarse_keys[v];
-  Clustering clustering = clustering_from_keys(fine_keys, coarse, fine);
-  clustering.counted_triangles = feasible_count;
-  return clustering;
+  return clustering_from_keys(fine_keys, coarse, fine);
 }
 
 }  // namespace octolod::bake

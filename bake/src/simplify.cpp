@@ -33,20 +33,22 @@ Status check_mesh(const NodeMesh& mesh) {
   return {};
 }
 
-// When the kept triangles fall below this share of what the search counted, the surviving
-// triangles overestimated them (many share cluster triples: a city's boxes) and the search runs
-// again with the exact count.
-constexpr double kRecountShare = 0.9;
+// When the clustered mesh keeps less than this share of the wanted triangles, the search with
+// the fast count ended low (the surviving triangles overshot the kept ones, or a halving search
+// whose probes they all put over the target: a 100K half city stopped at 0.72 of its target)
+// and the step searches again with the exact count, keeping whichever result has more.
+constexpr double kRecountShare = 0.85;
 
 // The grid method for a wanted triangle count: the adaptive grid searched with the fast count
 // (SearchCount::surviving), again with the exact one where that ended far below the target.
 ClusteredMesh cluster_for_target(const PreparedNode& node, std::size_t target) {
-  const Clustering fast = adaptive_grid_clustering(node, target, SearchCount::surviving);
-  ClusteredMesh clustered = build_clustered_mesh(node.mesh(), node.face_normal, fast, node.origin);
-  if (static_cast<double>(clustered.mesh.triangle_count()) >= kRecountShare * static_cast<double>(fast.counted_triangles))
-    return clustered;
-  return build_clustered_mesh(node.mesh(), node.face_normal, adaptive_grid_clustering(node, target, SearchCount::kept),
-                              node.origin);
+  ClusteredMesh fast = build_clustered_mesh(node.mesh(), node.face_normal,
+                                            adaptive_grid_clustering(node, target, SearchCount::surviving), node.origin);
+  if (static_cast<double>(fast.mesh.triangle_count()) >= kRecountShare * static_cast<double>(target)) return fast;
+  ClusteredMesh exact = build_clustered_mesh(node.mesh(), node.face_normal,
+                                             adaptive_grid_clustering(node, target, SearchCount::kept), node.origin);
+  const std::size_t kept = exact.mesh.triangle_count();
+  return kept > fast.mesh.triangle_count() && kept <= target ? std::move(exact) : std::move(fast);
 }
 
 }  // namespace

@@ -42,8 +42,6 @@ struct Clustering {
   // least quadric error when that is lower.
   std::vector<std::uint8_t> locked;
   std::vector<ClampBox> box;
-  // The triangles the search that chose it counted (cluster.h, SearchCount); 0 when none did.
-  std::size_t counted_triangles = 0;
 };
 
 // The position of an unlocked cluster (local coordinates, as its n = 3 position `quadric`):
