@@ -325,9 +325,7 @@ Clustering adaptive_grid_clustering(const PreparedNode& node, std::size_t target
   const GridChoice choice =
       search_grid_resolution(node, static_cast<std::size_t>(kCoarseShare * static_cast<double>(target)), rule);
   const std::uint32_t g = choice.g;
-  if (g < kMinAdaptiveResolution) {
-    return uniform_clustering(node, search_grid_resolution(node, target, rule).g);
-  }
+  if (g < kMinAdaptiveResolution) return uniform_clustering(node, choose_grid_resolution(node, target, rule));
   const GridDomain coarse = make_domain(node, g);
   const GridDomain fine = halved(coarse);
   const std::vector<std::uint64_t> coarse_keys = vertex_keys(node, coarse);
