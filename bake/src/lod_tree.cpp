@@ -54,16 +54,11 @@ struct Pending {
 };
 
 // The scheduler's view of one octree node, from its creation until it is delivered (the open
-// nodes of the tree, not all of them): what never changes (the octree node's prefix and depth
-// name its directory and cell) and the counts; a pending parent's children's results hang off
-// it until the parent's task takes them.
+// nodes of the tree, not all of them): its shape, which the log records (prefix and depth name
+// its directory and cell; triangles are a leaf's own, then its delivered children's), and the
+// counts; a pending parent's children's results hang off it until the parent's task takes them.
 struct Slot {
-  std::uint64_t prefix = 0;  // octant path (octree_build.h), its last octant the one in the parent
-  std::int32_t parent = -1;
-  std::uint32_t depth = 0;
-  std::array<std::int32_t, 8> child{-1, -1, -1, -1, -1, -1, -1, -1};  // node indices by octant
-  bool leaf = false;
-  std::uint64_t triangles = 0;  // the subtree's: a leaf's own, then its delivered children's
+  NodeShape shape;
   std::uint32_t done = 0;    // children whose chains are complete
   std::uint64_t child_triangles = 0;
   bool closed = false;       // internal node whose children are all known
@@ -73,7 +68,7 @@ struct Slot {
 
   // An internal node is ready once it is closed and every child it has is done.
   bool ready() const {
-    return closed && done == static_cast<std::uint32_t>(std::count_if(child.begin(), child.end(),
+    return closed && done == static_cast<std::uint32_t>(std::count_if(shape.children.begin(), shape.children.end(),
                                                                       [](std::int32_t c) { return c >= 0; }));
   }
 };
@@ -153,10 +148,10 @@ class LodTreeBuilder::Impl {
     task.leaf = true;
     task.weight = nodes[static_cast<std::size_t>(node)].triangles;
     Slot& s = slot(node);
-    s.leaf = true;
-    s.triangles = task.weight;
+    s.shape.leaf = true;
+    s.shape.triangles = task.weight;
     ++stats_.leaves;
-    stats_.depth = std::max(stats_.depth, s.depth);
+    stats_.depth = std::max(stats_.depth, s.shape.depth);
     task.work = streamed.empty() ? leaf_work_bytes(records.size()) : kRunsAlone;  // a streamed leaf runs alone
     queued_bytes_ += records.size();
     task.records = std::move(records);
@@ -238,12 +233,12 @@ class LodTreeBuilder::Impl {
     for (std::size_t i = registered_; i < nodes.size(); ++i) {
       const OctreeNode& n = nodes[i];
       Slot s;
-      s.prefix = n.prefix;
-      s.parent = n.parent;
-      s.depth = n.depth;
+      s.shape.prefix = n.prefix;
+      s.shape.parent = n.parent;
+      s.shape.depth = n.depth;
       slots_.emplace(static_cast<std::int32_t>(i), std::move(s));
       if (n.parent >= 0) {  // registered before it: a lower index
-        slot(n.parent).child[n.prefix & 7u] = static_cast<std::int32_t>(i);
+        slot(n.parent).shape.children[n.prefix & 7u] = static_cast<std::int32_t>(i);
       }
     }
     registered_ = nodes.size();
@@ -279,9 +274,7 @@ class LodTreeBuilder::Impl {
     task.node = node;
     task.weight = s.child_triangles;
     if (options_.build_lods && s.pending) task.merge = plan_merge(s.pending->child);
-    // a merge too large for memory is built streaming, alone
-    const std::size_t input = task.merge.bytes;
-    task.work = input > kStreamedMergeFactor * merge_bytes_ ? kRunsAlone : node_work_bytes(input);
+    task.work = merges_streaming(task.merge) ? kRunsAlone : node_work_bytes(task.merge.bytes);
     push(std::move(task));
   }
 
@@ -306,8 +299,8 @@ class LodTreeBuilder::Impl {
     heap_.pop_back();
     running_work_ += task.work;
     Slot& s = slot(task.node);
-    const std::string dir = node_path(s.prefix, s.depth);
-    const Bounds cell = options_.cube.cell(s.prefix, s.depth);
+    const std::string dir = node_path(s.shape.prefix, s.shape.depth);
+    const Bounds cell = options_.cube.cell(s.shape.prefix, s.shape.depth);
     std::unique_ptr<Pending> taken = std::move(s.pending);
     std::array<ChildLod, 8> children;
     Bounds below;  // the children's subtrees
@@ -321,9 +314,10 @@ class LodTreeBuilder::Impl {
     const std::size_t record_bytes = task.records.size();
     const auto start = Clock::now();
     // the root has no neighbours to meet: its boundary is the mesh's own border
-    const bool lock_boundary = s.depth > 0;
-    Result<NodeDone> done = task.leaf ? run_leaf(task, dir, cell, lock_boundary, scratch)
-                                      : run_internal(children, task.merge, dir, cell, lock_boundary);
+    LodOptions lod = options_.lod;
+    lod.lock_boundary = s.shape.depth > 0;
+    Result<NodeDone> done = task.leaf ? run_leaf(task, dir, cell, lod, scratch)
+                                      : run_internal(children, task.merge, dir, cell, lod);
     std::size_t released = 0;
     std::uint64_t rereads = 0;
     for (ChildLod& c : children) {
@@ -350,11 +344,13 @@ class LodTreeBuilder::Impl {
     work_.notify_all();
   }
 
-  Result<NodeDone> run_leaf(Task& task, const std::string& dir, const Bounds& cell, bool lock_boundary,
+  // `lod`: the node's chain options (LodOptions::lock_boundary set for it; include_input is
+  // set here).
+  Result<NodeDone> run_leaf(Task& task, const std::string& dir, const Bounds& cell, const LodOptions& lod,
                             Scratch& scratch) {
     if (cleanup_signal_received()) return interrupted();
     OCTOLOD_RETURN_IF_ERROR(make_directory(dir));
-    if (!task.streamed.empty()) return run_streamed_leaf(task, dir, cell, lock_boundary);
+    if (!task.streamed.empty()) return run_streamed_leaf(task, dir, cell, lod);
     NodeMesh mesh;
     scratch.indexer.index(task.records, options_.layout, mesh);
     task.records = {};  // the queue's bytes are given back in run_one
@@ -363,21 +359,19 @@ class LodTreeBuilder::Impl {
       lods[0].mesh = std::move(mesh);
       return write_lods(dir, lods);
     }
-    LodOptions o = options_.lod;
+    LodOptions o = lod;
     o.include_input = true;
-    o.lock_boundary = lock_boundary;
     auto lods = build_lods(std::move(mesh), 0.0, cell, o);
     if (!lods.ok()) return lods.status();
     return write_lods(dir, lods.value());
   }
 
-  Result<NodeDone> run_streamed_leaf(Task& task, const std::string& dir, const Bounds& cell, bool lock_boundary) {
+  Result<NodeDone> run_streamed_leaf(Task& task, const std::string& dir, const Bounds& cell, const LodOptions& lod) {
     StreamedLeafOptions o;
     o.layout = options_.layout;
     o.cell = cell;
     o.build_lods = options_.build_lods;
-    o.lod = options_.lod;
-    o.lod.lock_boundary = lock_boundary;  // the chain after LOD 1 (which keeps it)
+    o.lod = lod;  // its lock_boundary: for the chain after LOD 1 (which keeps the boundary)
     o.chunk_triangles = options_.streamed_chunk_triangles;
     o.max_lod1_triangles = options_.streamed_max_lod1_triangles;
     o.work_dir = options_.work_dir;
@@ -392,6 +386,10 @@ class LodTreeBuilder::Impl {
     done->finest = {};
     return done;
   }
+
+  // Whether an internal node's merge is too large for memory: then it is built streaming
+  // (run_streamed_internal), alone.
+  bool merges_streaming(const MergePlan& plan) const { return plan.bytes > kStreamedMergeFactor * merge_bytes_; }
 
   // An internal node's MergePlan: choose_merged_lods over its present children.
   MergePlan plan_merge(const std::array<ChildLod, 8>& children) const {
@@ -411,27 +409,25 @@ class LodTreeBuilder::Impl {
   }
 
   Result<NodeDone> run_internal(std::array<ChildLod, 8>& children, const MergePlan& plan,
-                                const std::string& dir, const Bounds& cell, bool lock_boundary) {
+                                const std::string& dir, const Bounds& cell, const LodOptions& lod) {
     if (cleanup_signal_received()) return interrupted();
     if (!options_.build_lods) return NodeDone{};
-    const auto& [chosen, merged_bytes, input_error] = plan;
-    if (merged_bytes > kStreamedMergeFactor * merge_bytes_) {
-      auto streamed = run_streamed_internal(children, chosen, input_error, dir, cell, lock_boundary);
+    if (merges_streaming(plan)) {
+      auto streamed = run_streamed_internal(children, plan.chosen, plan.input_error, dir, cell, lod);
       if (!streamed.ok() || !streamed->lods.lods.empty()) return streamed;
     }
     std::vector<const NodeMesh*> meshes;
     std::size_t next = 0;
     for (ChildLod& c : children) {
       if (!c.present) continue;
-      OCTOLOD_RETURN_IF_ERROR(load_chosen(c, chosen[next++]));
+      OCTOLOD_RETURN_IF_ERROR(load_chosen(c, plan.chosen[next++]));
       meshes.push_back(&c.mesh);
     }
     NodeMesh merged = merge_meshes(meshes);
     for (ChildLod& c : children) c.mesh = {};
-    LodOptions o = options_.lod;
+    LodOptions o = lod;
     o.include_input = false;
-    o.lock_boundary = lock_boundary;
-    auto lods = build_lods(std::move(merged), input_error, cell, o);
+    auto lods = build_lods(std::move(merged), plan.input_error, cell, o);
     if (!lods.ok()) return lods.status();
     return write_lods(dir, lods.value());
   }
@@ -453,7 +449,7 @@ class LodTreeBuilder::Impl {
   // then merges in memory).
   Result<NodeDone> run_streamed_internal(std::array<ChildLod, 8>& children,
                                          const std::vector<std::size_t>& chosen, double input_error,
-                                         const std::string& dir, const Bounds& cell, bool lock_boundary) {
+                                         const std::string& dir, const Bounds& cell, const LodOptions& lod) {
     TempFile records = make_temp_file(options_.work_dir, "merged-children");
     const std::size_t record_bytes = soup_record_bytes(options_.layout);
     {
@@ -482,8 +478,7 @@ class LodTreeBuilder::Impl {
     StreamedLeafOptions o;
     o.layout = options_.layout;
     o.cell = cell;
-    o.lod = options_.lod;
-    o.lod.lock_boundary = lock_boundary;  // the chain after LOD 1 (which keeps it)
+    o.lod = lod;  // its lock_boundary: for the chain after LOD 1 (which keeps the boundary)
     o.chunk_triangles = limit;
     o.max_lod1_triangles = limit;
     o.work_dir = options_.work_dir;
@@ -539,8 +534,7 @@ class LodTreeBuilder::Impl {
   void deliver(std::int32_t node, NodeDone done) {
     ++completed_;
     const auto done_slot = slots_.find(node);
-    const Slot& s = done_slot->second;
-    const NodeShape shape{s.prefix, s.triangles, s.parent, s.depth, s.child, s.leaf};
+    const NodeShape shape = done_slot->second.shape;
     slots_.erase(done_slot);
     const std::int32_t parent = shape.parent;
     const auto octant = static_cast<std::size_t>(shape.prefix & 7u);
@@ -549,7 +543,7 @@ class LodTreeBuilder::Impl {
     if (!error_.ok() || parent < 0) return;
     Slot& p = slot(parent);
     ++p.done;
-    p.triangles += shape.triangles;
+    p.shape.triangles += shape.triangles;
     if (!p.pending) p.pending = std::make_unique<Pending>();
     p.pending->bounds.extend(done.lods.bounds);
     if (has_lod) {
