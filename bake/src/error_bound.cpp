@@ -21,52 +21,12 @@
 #include <vector>
 
 #include "octolod/measure/triangle_bvh.h"
+#include "point_triangle.h"
 
 namespace octolod::bake {
 namespace {
 
-using Vec = std::array<double, 3>;
-
-Vec sub(const Vec& a, const Vec& b) { return {a[0] - b[0], a[1] - b[1], a[2] - b[2]}; }
-double dot(const Vec& a, const Vec& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
-
-// Squared distance from p to triangle (a,b,c), Ericson 2005, 5.1.5 ClosestPtPointTriangle, in
-// double. Squared: the bounds below only compare distances, one square root at the end.
-double point_triangle_distance2(const Vec& p, const Vec& a, const Vec& b, const Vec& c) {
-  const Vec ab = sub(b, a), ac = sub(c, a), ap = sub(p, a);
-  auto dist2_to = [&p](const Vec& q) { const Vec d = sub(p, q); return dot(d, d); };
-  auto lerp = [](const Vec& x, const Vec& y, double t) {
-    return Vec{x[0] + t * (y[0] - x[0]), x[1] + t * (y[1] - x[1]), x[2] + t * (y[2] - x[2])};
-  };
-  const double d1 = dot(ab, ap), d2 = dot(ac, ap);
-  if (d1 <= 0.0 && d2 <= 0.0) return dot(ap, ap);
-  const Vec bp = sub(p, b);
-  const double d3 = dot(ab, bp), d4 = dot(ac, bp);
-  if (d3 >= 0.0 && d4 <= d3) return dot(bp, bp);
-  const double vc = d1 * d4 - d3 * d2;
-  if (vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0) return dist2_to(lerp(a, b, d1 / (d1 - d3)));
-  const Vec cp = sub(p, c);
-  const double d5 = dot(ab, cp), d6 = dot(ac, cp);
-  if (d6 >= 0.0 && d5 <= d6) return dot(cp, cp);
-  const double vb = d5 * d2 - d1 * d6;
-  if (vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0) return dist2_to(lerp(a, c, d2 / (d2 - d6)));
-  const double va = d3 * d6 - d5 * d4;
-  if (va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0)
-    return dist2_to(lerp(b, c, (d4 - d3) / ((d4 - d3) + (d5 - d6))));
-  const double denom = va + vb + vc;
-  if (!(denom > 0.0)) {  // degenerate triangle: its edges
-    double best = std::min({dot(ap, ap), dot(bp, bp), dot(cp, cp)});
-    const Vec* ends[3][2] = {{&a, &b}, {&b, &c}, {&c, &a}};
-    for (const auto& e : ends) {
-      const Vec d = sub(*e[1], *e[0]);
-      const double len2 = dot(d, d);
-      if (len2 > 0.0) best = std::min(best, dist2_to(lerp(*e[0], *e[1], std::clamp(dot(sub(p, *e[0]), d) / len2, 0.0, 1.0))));
-    }
-    return best;
-  }
-  const double v = vb / denom, w = vc / denom;
-  return dist2_to({a[0] + ab[0] * v + ac[0] * w, a[1] + ab[1] * v + ac[1] * w, a[2] + ab[2] * v + ac[2] * w});
-}
+using Vec = Vec3d;
 
 constexpr int kMaxRefineDepth = 4;
 

@@ -8,6 +8,7 @@
 #include <limits>
 #include <numeric>
 
+#include "diagonal_flips.h"
 #include "flat_hash.h"
 #include "quadric.h"
 
@@ -404,25 +405,28 @@ ClusteredMesh build_clustered_mesh(const NodeMesh& mesh, std::span<const std::ar
   }
   window_block = {};
 
-  // candidate triangles: sources counted per cluster triple
-  FlatHashMap<3> candidate_of(triangle_count);
+  // candidate triangles: sources counted per cluster triple (the triple table freed before the
+  // flips build their edge table)
   std::vector<Candidate> candidates;
   std::vector<std::uint32_t> candidate_of_triangle(triangle_count, kNoTriangle);
-  for (std::size_t t = 0; t < triangle_count; ++t) {
-    const std::uint32_t* corner = &mesh.indices[3 * t];
-    const std::uint32_t c0 = cluster[corner[0]], c1 = cluster[corner[1]], c2 = cluster[corner[2]];
-    if (c0 == c1 || c1 == c2 || c0 == c2) continue;
-    std::array<std::uint32_t, 3> sorted{c0, c1, c2};
-    std::sort(sorted.begin(), sorted.end());
-    const bool even = winds_like_sorted(c0, c1, c2);
-    bool inserted = false;
-    const std::uint32_t index =
-        candidate_of.find_or_insert(sorted, static_cast<std::uint32_t>(candidates.size()), inserted);
-    if (inserted) candidates.emplace_back();
-    candidate_of_triangle[t] = index;
-    Candidate& candidate = candidates[index];
-    if (candidate.sources.add(even, face_normal[t]))
-      (even ? candidate.first_like : candidate.first_opposite) = static_cast<std::uint32_t>(t);
+  {
+    FlatHashMap<3> candidate_of(triangle_count);
+    for (std::size_t t = 0; t < triangle_count; ++t) {
+      const std::uint32_t* corner = &mesh.indices[3 * t];
+      const std::uint32_t c0 = cluster[corner[0]], c1 = cluster[corner[1]], c2 = cluster[corner[2]];
+      if (c0 == c1 || c1 == c2 || c0 == c2) continue;
+      std::array<std::uint32_t, 3> sorted{c0, c1, c2};
+      std::sort(sorted.begin(), sorted.end());
+      const bool even = winds_like_sorted(c0, c1, c2);
+      bool inserted = false;
+      const std::uint32_t index =
+          candidate_of.find_or_insert(sorted, static_cast<std::uint32_t>(candidates.size()), inserted);
+      if (inserted) candidates.emplace_back();
+      candidate_of_triangle[t] = index;
+      Candidate& candidate = candidates[index];
+      if (candidate.sources.add(even, face_normal[t]))
+        (even ? candidate.first_like : candidate.first_opposite) = static_cast<std::uint32_t>(t);
+    }
   }
 
   // output: kept_copies per candidate, oriented like their sources, vertices compacted in wedge order
@@ -444,6 +448,9 @@ ClusteredMesh build_clustered_mesh(const NodeMesh& mesh, std::span<const std::ar
                           source_wedges(candidate.first_opposite), record_of, kept);
     if (kept.size() > before) output_of_candidate[ci] = static_cast<std::uint32_t>(before / 3);
   }
+  std::vector<std::uint32_t> wedge_cluster(wedge_count);
+  for (std::size_t w = 0; w < wedge_count; ++w) wedge_cluster[w] = static_cast<std::uint32_t>(order[w] >> 32);
+  flip_diagonals({mesh, cluster, clustering.count, wedge_cluster, wedge_record}, kept);
   std::vector<std::uint32_t> output_id(wedge_count, UINT32_MAX);
   for (std::uint32_t w : kept) output_id[w] = 0;
   std::uint32_t next = 0;
@@ -456,7 +463,7 @@ ClusteredMesh build_clustered_mesh(const NodeMesh& mesh, std::span<const std::ar
   out.indices.reserve(kept.size());
   for (std::uint32_t w : kept) out.indices.push_back(output_id[w]);
   std::vector<std::uint32_t> kept_cluster(kept.size());
-  for (std::size_t i = 0; i < kept.size(); ++i) kept_cluster[i] = static_cast<std::uint32_t>(order[kept[i]] >> 32);
+  for (std::size_t i = 0; i < kept.size(); ++i) kept_cluster[i] = wedge_cluster[kept[i]];
   result.vertex_cluster = cluster;
   result.fan_offset.assign(std::size_t{clustering.count} + 1, 0);
   for (std::uint32_t c : kept_cluster) ++result.fan_offset[c + 1];

@@ -64,14 +64,16 @@ void place_representative(const double* quadric, const double* mean, const Clamp
 // two-sided pair, the copy facing like the sources that wind like the sorted triple takes the
 // first such source's wedges, the other copy the first opposite source's, wound the other way.
 // Triangles with two corners at bit-identical positions are dropped (their edges cancel mod 2).
-// Unused vertices are removed; output vertices are in (cluster, smallest vertex id of the wedge)
-// order.
+// Then the diagonals of bent quads that pass further from the input than the other diagonal
+// would are flipped (diagonal_flips.h; the boundary mod 2 does not change). Unused vertices are
+// removed; output vertices are in (cluster, smallest vertex id of the wedge) order.
 inline constexpr std::uint32_t kNoTriangle = 0xFFFFFFFFu;
 struct ClusteredMesh {
   NodeMesh mesh;
   // Per input triangle: an output triangle at or next to its image (the image itself when it
-  // survived, else one sharing an image edge, else one at an image vertex), kNoTriangle when
-  // there is none. Only a hint for hausdorff_upper_bound: any output triangle gives a valid bound.
+  // survived, or the triangle a flip made of it; else one sharing an image edge, else one at an
+  // image vertex), kNoTriangle when there is none. Only a hint for hausdorff_upper_bound: any
+  // output triangle gives a valid bound.
   std::vector<std::uint32_t> nearby_output_triangle;
   // The fan of every cluster: the output triangles with a corner at it (CSR: fan_triangle
   // [fan_offset[c], fan_offset[c+1])), and each input vertex's cluster: where the error bound

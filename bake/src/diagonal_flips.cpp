@@ -1,0 +1,142 @@
+// diagonal_flips.h: one pass over the output's edges with a cluster-pair edge table; the input
+// triangles around each cluster (CSR) are gathered once the first quad needs them.
+#include "diagonal_flips.h"
+
+#include <array>
+#include <cmath>
+
+#include "flat_hash.h"
+#include "point_triangle.h"
+
+namespace octolod::bake {
+namespace {
+
+// Bent pairs only: the two triangles' normals at least this far apart (cosine). Between nearly
+// coplanar triangles the diagonal hardly moves the surface.
+constexpr double kMinBendCosine = 0.98;
+// A flip must lower the squared distance by this share, so that rounding never decides it.
+constexpr double kMinGain = 0.05;
+
+struct EdgeUse {
+  std::uint32_t uses = 0;
+  std::uint32_t corner[2] = {0, 0};  // the first two uses: 3 * triangle + k, the edge k -> k+1
+};
+
+// The input triangles with a corner in each cluster, a triangle once per distinct cluster of its
+// corners.
+struct ClusterFans {
+  std::vector<std::uint32_t> offset;
+  std::vector<std::uint32_t> triangle;
+
+  ClusterFans(const NodeMesh& input, std::span<const std::uint32_t> vertex_cluster, std::uint32_t cluster_count)
+      : offset(std::size_t{cluster_count} + 1, 0) {
+    auto for_clusters_of = [&](std::size_t t, auto&& f) {
+      const std::uint32_t* v = &input.indices[3 * t];
+      const std::uint32_t x = vertex_cluster[v[0]], y = vertex_cluster[v[1]], z = vertex_cluster[v[2]];
+      f(x);
+      if (y != x) f(y);
+      if (z != x && z != y) f(z);
+    };
+    const std::size_t triangles = input.triangle_count();
+    for (std::size_t t = 0; t < triangles; ++t) for_clusters_of(t, [&](std::uint32_t c) { ++offset[c + 1]; });
+    for (std::size_t c = 0; c < cluster_count; ++c) offset[c + 1] += offset[c];
+    triangle.resize(offset.back());
+    std::vector<std::uint32_t> fill(offset.begin(), offset.end() - 1);
+    for (std::size_t t = 0; t < triangles; ++t)
+      for_clusters_of(t, [&](std::uint32_t c) { triangle[fill[c]++] = static_cast<std::uint32_t>(t); });
+  }
+};
+
+Vec3d midpoint(const Vec3d& a, const Vec3d& b) { return {0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1]), 0.5 * (a[2] + b[2])}; }
+
+}  // namespace
+
+std::size_t flip_diagonals(const FlipInput& in, std::vector<std::uint32_t>& corners) {
+  const std::size_t stride = in.input.layout.floats();
+  const std::size_t triangle_count = corners.size() / 3;
+  auto position = [&](std::uint32_t wedge) {
+    const float* f = &in.wedge_record[wedge * stride];
+    return Vec3d{f[0], f[1], f[2]};
+  };
+  auto input_position = [&](std::uint32_t v) {
+    const float* f = &in.input.vertices[v * stride];
+    return Vec3d{f[0], f[1], f[2]};
+  };
+  auto cluster_of = [&](std::size_t corner) { return in.wedge_cluster[corners[corner]]; };
+  auto edge_key = [](std::uint32_t a, std::uint32_t b) {
+    return a < b ? std::array<std::uint32_t, 2>{a, b} : std::array<std::uint32_t, 2>{b, a};
+  };
+
+  // cluster-pair edges: uses and the first two corners using them; new diagonals join the table
+  FlatHashMap<2> edge_of(corners.size() + triangle_count);
+  std::vector<EdgeUse> edges;
+  edges.reserve(corners.size() / 2 + 1);
+  for (std::size_t corner = 0; corner < corners.size(); ++corner) {
+    const std::size_t next = corner - corner % 3 + (corner + 1) % 3;
+    bool inserted = false;
+    const std::uint32_t e = edge_of.find_or_insert(edge_key(cluster_of(corner), cluster_of(next)),
+                                                   static_cast<std::uint32_t>(edges.size()), inserted);
+    if (inserted) edges.emplace_back();
+    EdgeUse& use = edges[e];
+    if (use.uses < 2) use.corner[use.uses] = static_cast<std::uint32_t>(corner);
+    ++use.uses;
+  }
+
+  std::optional<ClusterFans> fans;
+  std::vector<std::uint8_t> flipped(triangle_count, 0);
+  std::size_t flips = 0;
+  const std::size_t original_edges = edges.size();
+  for (std::size_t e = 0; e < original_edges; ++e) {
+    if (edges[e].uses != 2) continue;
+    const std::uint32_t c0 = edges[e].corner[0], c1 = edges[e].corner[1];
+    const std::size_t t0 = c0 / 3, t1 = c1 / 3;
+    if (flipped[t0] || flipped[t1]) continue;
+    auto at = [&](std::size_t t, std::size_t k) { return corners[3 * t + k % 3]; };
+    const std::size_t k0 = c0 % 3, k1 = c1 % 3;
+    // t0 = (a, b, c), t1 = (b, a, d) with the same wedges a and b
+    const std::uint32_t a = at(t0, k0), b = at(t0, k0 + 1), c = at(t0, k0 + 2);
+    if (at(t1, k1) != b || at(t1, k1 + 1) != a) continue;
+    const std::uint32_t d = at(t1, k1 + 2);
+    const std::uint32_t cc = in.wedge_cluster[c], cd = in.wedge_cluster[d];
+    if (cc == cd || edge_of.find(edge_key(cc, cd)) != FlatHashMap<2>::kMissing) continue;
+
+    const Vec3d pa = position(a), pb = position(b), pc = position(c), pd = position(d);
+    const Vec3d n0 = cross(sub(pb, pa), sub(pc, pa)), n1 = cross(sub(pa, pb), sub(pd, pb));
+    const double l0 = std::sqrt(dot(n0, n0)), l1 = std::sqrt(dot(n1, n1));
+    if (!(l0 > 0.0 && l1 > 0.0) || dot(n0, n1) > kMinBendCosine * l0 * l1) continue;
+    // the flipped pair (a, d, c), (b, c, d) must face like the pair it replaces
+    const Vec3d m0 = cross(sub(pd, pa), sub(pc, pa)), m1 = cross(sub(pc, pb), sub(pd, pb));
+    const Vec3d facing{n0[0] + n1[0], n0[1] + n1[1], n0[2] + n1[2]};
+    if (!(dot(m0, facing) > 0.0 && dot(m1, facing) > 0.0)) continue;
+
+    // squared distances of the diagonals' midpoints to the input triangles at the quad's four
+    // clusters (each triangle once)
+    if (!fans) fans.emplace(in.input, in.vertex_cluster, in.cluster_count);
+    const Vec3d mid_ab = midpoint(pa, pb), mid_cd = midpoint(pc, pd);
+    const std::array<std::uint32_t, 4> quad{in.wedge_cluster[a], in.wedge_cluster[b], cc, cd};
+    double before = INFINITY, after = INFINITY;
+    for (std::size_t q = 0; q < quad.size(); ++q)
+      for (std::uint32_t i = fans->offset[quad[q]]; i < fans->offset[quad[q] + 1]; ++i) {
+        const std::uint32_t* v = &in.input.indices[3 * std::size_t{fans->triangle[i]}];
+        bool seen = false;  // at an earlier cluster of the quad
+        for (std::size_t r = 0; r < q; ++r)
+          for (std::size_t k = 0; k < 3; ++k) seen = seen || in.vertex_cluster[v[k]] == quad[r];
+        if (seen) continue;
+        const Vec3d q0 = input_position(v[0]), q1 = input_position(v[1]), q2 = input_position(v[2]);
+        before = std::min(before, point_triangle_distance2(mid_ab, q0, q1, q2));
+        after = std::min(after, point_triangle_distance2(mid_cd, q0, q1, q2));
+      }
+    if (!(after < (1.0 - kMinGain) * before)) continue;
+
+    corners[3 * t0] = a, corners[3 * t0 + 1] = d, corners[3 * t0 + 2] = c;
+    corners[3 * t1] = b, corners[3 * t1 + 1] = c, corners[3 * t1 + 2] = d;
+    flipped[t0] = flipped[t1] = 1;
+    bool inserted = false;
+    edge_of.find_or_insert(edge_key(cc, cd), static_cast<std::uint32_t>(edges.size()), inserted);
+    edges.push_back({2, {0, 0}});
+    ++flips;
+  }
+  return flips;
+}
+
+}  // namespace octolod::bake
