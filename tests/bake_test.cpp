@@ -585,6 +585,50 @@ TEST_F(BakeTest, ATooSmallBudgetNamesTheBudgetThatSuffices) {
   EXPECT_TRUE(bake(o).ok());
 }
 
+// An input smaller than max_tris is one leaf of its own size: the budget is divided for its
+// triangles (counted, as the header's faces may be polygons), not for a leaf of max_tris (which
+// would need 1.8 GiB at max_tris 100000). Refused, the message names the input's size and the
+// budget that suffices; the tree is the one a large budget bakes.
+TEST_F(BakeTest, ASmallInputIsBudgetedForItsOwnSize) {
+  samplegen::SampleSpec spec;
+  spec.shape = samplegen::Shape::rock;
+  spec.triangles = 3'000;
+  ASSERT_TRUE(samplegen::write_sample_ply(spec, path("rock3k.ply")).ok());
+  BakeOptions o = options("out");
+  o.input = path("rock3k.ply");
+  o.max_tris = 100'000;
+  o.memory_budget_bytes = 8 << 20;
+  auto refused = bake(o);
+  ASSERT_EQ(refused.status().code(), ErrorCode::usage);
+  const std::string message = refused.status().message();
+  EXPECT_NE(message.find("an input of 3000 triangles"), std::string::npos) << message;
+  const std::size_t at = message.find("needs at least ");
+  ASSERT_NE(at, std::string::npos) << message;
+  const std::uint64_t needed_mib = std::stoull(message.substr(at + 15));
+  EXPECT_LT(needed_mib, 24u);
+  EXPECT_FALSE(fs::exists(path("out")));
+  expect_no_temp_files();
+
+  o.memory_budget_bytes = needed_mib << 20;
+  auto baked = bake(o);
+  ASSERT_TRUE(baked.ok()) << baked.status().message();
+  const Manifest small = written_manifest(path("out"), baked.value());
+  ASSERT_EQ(small.nodes.size(), 1u);
+  EXPECT_EQ(small.nodes[0].source_triangles, 3'000u);
+
+  BakeOptions large = o;
+  large.output = path("large");
+  large.memory_budget_bytes = std::uint64_t{2} << 30;
+  auto reference = bake(large);
+  ASSERT_TRUE(reference.ok()) << reference.status().message();
+  std::map<std::string, std::string> files = tree_files(path("out")), expected = tree_files(path("large"));
+  files.erase("manifest.json");
+  expected.erase("manifest.json");
+  EXPECT_EQ(files, expected);
+  EXPECT_EQ(manifest_to_json(without_run_details(small)),
+            manifest_to_json(without_run_details(written_manifest(path("large"), reference.value()))));
+}
+
 TEST_F(BakeTest, EmptyMeshBakesToARootWithoutLods) {
   std::ofstream(path("empty.ply")) << "ply\nformat ascii 1.0\nelement vertex 0\nproperty float x\n"
                                       "property float y\nproperty float z\nelement face 0\n"

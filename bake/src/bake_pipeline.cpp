@@ -8,6 +8,7 @@
 #include <chrono>
 #include <cstring>
 #include <functional>
+#include <limits>
 #include <optional>
 #include <string>
 #include <system_error>
@@ -65,7 +66,7 @@ struct OctreeBudget {
   std::size_t io_bytes = 0;     // the soup file reader's buffer
   std::size_t queue_bytes = 0;  // leaves waiting for a thread
   std::size_t keep_bytes = 0;   // children's LODs held for their parents (lod_tree.h)
-  std::size_t merge_bytes = 0;  // an internal node's merged input (LodTreeOptions::merge_bytes)
+  std::size_t merge_bytes = 0;  // an internal node's merged input (LodTreeOptions::merge_bytes); 0 for a one-leaf tree
   std::size_t work_bytes = 0;   // node work in flight (LodTreeOptions::work_bytes)
   std::uint64_t sort_bytes = 0;
 };
@@ -73,15 +74,21 @@ struct OctreeBudget {
 // Node work threads besides the caller, for `threads` in all (the caller works too).
 unsigned lod_workers(unsigned threads) { return threads > 1 ? threads - 1 : 0; }
 
+// The input's triangle count when the budget is divided before it is known.
+constexpr std::uint64_t kUnknownTriangles = std::numeric_limits<std::uint64_t>::max();
+
+// `input_triangles`: the input's triangle count, or kUnknownTriangles. No leaf holds more than
+// the input, and no internal node merges more than the input's mesh (its triangles with three
+// vertices each), so a small input needs less than max_tris says.
 Result<OctreeBudget> divide_octree_budget(const BakeOptions& options, VertexLayout layout,
-                                          unsigned workers) {
+                                          unsigned workers, std::uint64_t input_triangles) {
   // One leaf's records. The octree pass holds a candidate and a replay of one. Node work in
   // flight is limited to the largest node's estimate (lod_tree.h, max_node_work_bytes: an
   // internal node merging up to twice merge_bytes, ~24 MB with the defaults, or a leaf at
   // max_depth as large as the budget keeps in memory, a quarter of it), which the threads
   // share; without LODs a thread holds a leaf's records.
-  const std::uint64_t leaf =
-      (std::uint64_t{options.max_tris} + 1) * soup_record_bytes(layout);
+  const std::uint64_t leaf_triangles = std::min<std::uint64_t>(options.max_tris, input_triangles);
+  const std::uint64_t leaf = (leaf_triangles + 1) * soup_record_bytes(layout);
   OctreeBudget b;
   b.io_bytes = static_cast<std::size_t>(
       std::clamp<std::uint64_t>(options.memory_budget_bytes / 16, 4096, std::uint64_t{1} << 20));
@@ -92,8 +99,17 @@ Result<OctreeBudget> divide_octree_budget(const BakeOptions& options, VertexLayo
       options.lods ? std::max(2 * leaf, options.memory_budget_bytes / 16) : 0);
   const std::uint64_t threads = workers + 1;  // the caller works too
   b.merge_bytes = 2 * b.queue_bytes;
+  // the cap is above any merge of this input, so it decides nothing (the tree does not depend
+  // on the input's size being known); an input of at most max_tris is one leaf, which merges
+  // nothing
+  if (input_triangles <= options.max_tris)
+    b.merge_bytes = 0;
+  else if (input_triangles != kUnknownTriangles)
+    b.merge_bytes = static_cast<std::size_t>(std::min<std::uint64_t>(
+        b.merge_bytes, input_triangles * (3 * layout.bytes() + 3 * sizeof(std::uint32_t))));
   const std::uint64_t largest_leaf =
-      max_depth_leaf_triangles(options.memory_budget_bytes, layout, options.max_tris) * soup_record_bytes(layout);
+      std::min(max_depth_leaf_triangles(options.memory_budget_bytes, layout, options.max_tris), input_triangles) *
+      soup_record_bytes(layout);
   const std::uint64_t work =
       options.lods ? max_node_work_bytes(b.merge_bytes, static_cast<std::size_t>(largest_leaf)) : threads * leaf;
   if (options.lods) b.work_bytes = static_cast<std::size_t>(work);
@@ -109,7 +125,11 @@ Result<OctreeBudget> divide_octree_budget(const BakeOptions& options, VertexLayo
     const std::uint64_t fixed = std::max(16 * (rest + floor) / 11, 16 * (rest + leaf_work_bytes(0)) / 7);
     return usage_error("memory budget of " + std::to_string((options.memory_budget_bytes + options.program_bytes) >> 20) +
                        " MiB is too small for --max-tris " + std::to_string(options.max_tris) +
-                       " with layout " + layout.describe() + ": needs at least " +
+                       " with layout " + layout.describe() +
+                       (input_triangles != kUnknownTriangles
+                            ? " and an input of " + std::to_string(input_triangles) + " triangles"
+                            : std::string()) +
+                       ": needs at least " +
                        std::to_string(((fixed + options.program_bytes) >> 20) + 1) +
                        " MiB (a smaller --max-tris needs less)");
   }
@@ -138,15 +158,16 @@ constexpr std::uint64_t kStreamedChunkLeaves = 4;
 // sorter with the full sort budget once the soup stage has freed its memory.
 class OctreeInput {
  public:
-  OctreeInput(const BakeOptions& options, fs::path work, unsigned threads)
-      : options_(options), work_(std::move(work)), threads_(threads) {}
+  // `input_triangles`: as divide_octree_budget's (known here only when the early check counted)
+  OctreeInput(const BakeOptions& options, fs::path work, unsigned threads, std::uint64_t input_triangles)
+      : options_(options), work_(std::move(work)), threads_(threads), input_triangles_(input_triangles) {}
 
   // SoupOptions::sink_start: the cube, the budget's division, and where the records go.
   Status start(const SoupSinkStart& soup) {
     layout_ = soup.layout;
     cube_ = RootCube::around(soup.bounds);
     key_ = centroid_morton_key(MortonQuantizer(cube_, options_.max_depth), layout_);
-    auto budget = divide_octree_budget(options_, layout_, workers());
+    auto budget = divide_octree_budget(options_, layout_, workers(), input_triangles_);
     if (!budget.ok()) return budget.status();
     budget_ = budget.value();
     const std::size_t record_bytes = soup_record_bytes(layout_);
@@ -222,6 +243,7 @@ class OctreeInput {
   const BakeOptions& options_;
   fs::path work_;
   unsigned threads_;
+  std::uint64_t input_triangles_;
   VertexLayout layout_;
   RootCube cube_;
   SortKeyFn key_;
@@ -381,7 +403,7 @@ constexpr std::size_t kMeshKeyBlock = 1 << 14;
 // work leaves of the budget.
 bool mesh_octree_fits(const BakeOptions& options, unsigned workers, VertexLayout layout,
                       std::uint64_t vertices, std::uint64_t triangles) {
-  auto budget = divide_octree_budget(options, layout, workers);
+  auto budget = divide_octree_budget(options, layout, workers, triangles);
   if (!budget.ok()) return false;
   const std::uint64_t bytes =
       vertices * layout.bytes() +
@@ -436,9 +458,9 @@ Result<OctreeResult> build_octree_from_mesh(const BakeOptions& options, unsigned
   OctreeResult result;
   result.cube = RootCube::around(mesh.bounds);
   const unsigned workers = lod_workers(threads);
-  auto budget = divide_octree_budget(options, mesh.layout, workers);
-  if (!budget.ok()) return budget.status();
   const std::size_t n = mesh.triangles.size() / 3;
+  auto budget = divide_octree_budget(options, mesh.layout, workers, n);
+  if (!budget.ok()) return budget.status();
 
   // sort: keys computed and sorted in memory
   auto start = Clock::now();
@@ -564,6 +586,24 @@ Status check_options(const BakeOptions& options) {
   return check_replaceable(options.output);
 }
 
+// Inputs whose header declares fewer faces than this many leaves of max_tris have their
+// triangles counted when the budget is too small for max_tris: below about four leaves the
+// input's own size bounds the leaves and the merged inputs (divide_octree_budget).
+constexpr std::uint64_t kSmallInputLeaves = 4;
+
+// Triangles of a PLY after its polygons are fanned out: one pass over the file.
+Result<std::uint64_t> count_triangles(const fs::path& ply) {
+  auto reader = PlyReader::open(ply, {});
+  if (!reader.ok()) return reader.status();
+  std::uint64_t triangles = 0;
+  for (;;) {
+    auto batch = reader.value()->next();
+    if (!batch.ok()) return batch.status();
+    if (batch->kind == PlyBatch::Kind::end) return triangles;
+    triangles += batch->triangles.size() / 3;
+  }
+}
+
 Result<BakeReport> run_bake(const BakeOptions& given) {
   const auto start = Clock::now();
   OCTOLOD_RETURN_IF_ERROR(check_options(given));
@@ -585,15 +625,25 @@ Result<BakeReport> run_bake(const BakeOptions& given) {
                     parent.string() + "' does not exist");
   }
   const fs::path work_parent = options.work_dir.empty() ? parent : options.work_dir;
+  std::uint64_t input_triangles = kUnknownTriangles;
   if (!fs::is_directory(work_parent, ec))
     return io_error("work directory '" + work_parent.string() + "' does not exist");
   {
-    // a budget too small for max_tris is refused before any work (the header names the layout)
+    // a budget too small for max_tris is refused before any work (the header names the layout),
+    // unless the input is too small to fill leaves of max_tris: then its triangles are counted
+    // (the header's faces may be polygons) and the budget divided for them
     PlyReadOptions header_only;
     header_only.buffer_bytes = 4096;
     auto reader = PlyReader::open(options.input, header_only);
     if (!reader.ok()) return reader.status();
-    auto budget = divide_octree_budget(options, reader.value()->info().layout, lod_workers(threads));
+    const PlyInfo& info = reader.value()->info();
+    auto budget = divide_octree_budget(options, info.layout, lod_workers(threads), kUnknownTriangles);
+    if (!budget.ok() && info.face_count < kSmallInputLeaves * std::uint64_t{options.max_tris}) {
+      auto triangles = count_triangles(options.input);
+      if (!triangles.ok()) return triangles.status();
+      input_triangles = triangles.value();
+      budget = divide_octree_budget(options, info.layout, lod_workers(threads), input_triangles);
+    }
     if (!budget.ok()) return budget.status();
   }
   remove_stale_temp_dirs(parent);
@@ -613,7 +663,7 @@ Result<BakeReport> run_bake(const BakeOptions& given) {
     soup_options.order = SoupOrder::any;
     soup_options.force_out_of_core = options.force_out_of_core;
     soup_options.progress = options.progress;
-    OctreeInput octree_input(options, work->path(), threads);
+    OctreeInput octree_input(options, work->path(), threads, input_triangles);
     soup_options.sink_start = [&](const SoupSinkStart& soup_start) {
       return octree_input.start(soup_start);
     };

@@ -66,7 +66,8 @@ struct BakeOptions {
   std::filesystem::path output;  // OUT_DIR: must not exist, or be empty, or hold an earlier bake
   // A node splits while it holds more than this many triangles (seed 3.4). Smaller leaves mean
   // more nodes, more files and a finer LOD cut; larger ones fewer files but coarser paging.
-  // Memory: about (max_tris + 1) soup records per leaf in flight. At least 1.
+  // Memory: about (max_tris + 1) soup records per leaf in flight (the input's triangles when
+  // fewer: an input smaller than four such leaves is budgeted for its own size). At least 1.
   std::uint32_t max_tris = 2000;
   // Deepest level (root = 0), at most 21. A leaf at max_depth cannot split, so it keeps all
   // its triangles; one holding more than max_depth_leaf_triangles(memory_budget_bytes, layout,
