@@ -78,6 +78,16 @@ bool all_face_up(const std::vector<float>& record, const std::vector<std::uint32
   return true;
 }
 
+// flip_diagonals on the roof with these wedges (clusters, positions) and triangles: no flip,
+// the triangles unchanged.
+void expect_no_flip(std::uint32_t cluster_count, const std::vector<std::uint32_t>& wedge_cluster,
+                    const std::vector<float>& record, std::vector<std::uint32_t> corners) {
+  const Roof roof = make_roof(8);
+  const std::vector<std::uint32_t> before = corners;
+  EXPECT_EQ(flip_diagonals({roof.mesh, roof.vertex_cluster, cluster_count, wedge_cluster, record}, corners), 0u);
+  EXPECT_EQ(corners, before);
+}
+
 TEST(DiagonalFlipTest, ADiagonalUnderTheRidgeIsFlippedOntoIt) {
   const Roof roof = make_roof(8);
   const std::vector<std::uint32_t> wedge_cluster{0, 1, 2, 3};
@@ -92,40 +102,26 @@ TEST(DiagonalFlipTest, ADiagonalUnderTheRidgeIsFlippedOntoIt) {
 }
 
 TEST(DiagonalFlipTest, ADiagonalAlongTheRidgeStays) {
-  const Roof roof = make_roof(8);
   // the same quad named the other way round: its diagonal c-d is the shared edge
-  const std::vector<std::uint32_t> wedge_cluster{2, 3, 1, 0};
   const std::vector<float> record = records({kCorners[2], kCorners[3], kCorners[1], kCorners[0]});
-  std::vector<std::uint32_t> corners{0, 1, 2, 1, 0, 3};
+  const std::vector<std::uint32_t> corners{0, 1, 2, 1, 0, 3};
   ASSERT_TRUE(all_face_up(record, corners));
-  const std::vector<std::uint32_t> before = corners;
-  EXPECT_EQ(flip_diagonals({roof.mesh, roof.vertex_cluster, 4, wedge_cluster, record}, corners), 0u);
-  EXPECT_EQ(corners, before);
+  expect_no_flip(4, {2, 3, 1, 0}, record, corners);
 }
 
 TEST(DiagonalFlipTest, NoFlipAcrossAnAttributeSeam) {
-  const Roof roof = make_roof(8);
   // wedge 4 is a second wedge of cluster 0 (a) at the same position: the two triangles meet at a
   // with different attribute values, so a-b is a seam
-  const std::vector<std::uint32_t> wedge_cluster{0, 1, 2, 3, 0};
-  const std::vector<float> record = records({kCorners[0], kCorners[1], kCorners[2], kCorners[3], kCorners[0]});
-  std::vector<std::uint32_t> corners{0, 1, 2, 1, 4, 3};
-  const std::vector<std::uint32_t> before = corners;
-  EXPECT_EQ(flip_diagonals({roof.mesh, roof.vertex_cluster, 4, wedge_cluster, record}, corners), 0u);
-  EXPECT_EQ(corners, before);
+  expect_no_flip(4, {0, 1, 2, 3, 0}, records({kCorners[0], kCorners[1], kCorners[2], kCorners[3], kCorners[0]}),
+                 {0, 1, 2, 1, 4, 3});
 }
 
 TEST(DiagonalFlipTest, NoFlipOntoAnEdgeThatExists) {
-  const Roof roof = make_roof(8);
-  // a fifth wedge e (its own cluster, above the ridge's far end) with a triangle (c, d, e)
+  // a fifth wedge e (its own cluster, above the ridge's middle) with a triangle (c, d, e)
   // already joining c and d: the flip would use c-d twice on one side
-  const std::vector<std::uint32_t> wedge_cluster{0, 1, 2, 3, 4};
-  const std::vector<float> record =
-      records({kCorners[0], kCorners[1], kCorners[2], kCorners[3], {0.0f, 0.0f, 2.0f}});
-  std::vector<std::uint32_t> corners{0, 1, 2, 1, 0, 3, 2, 3, 4};
-  const std::vector<std::uint32_t> before = corners;
-  EXPECT_EQ(flip_diagonals({roof.mesh, roof.vertex_cluster, 5, wedge_cluster, record}, corners), 0u);
-  EXPECT_EQ(corners, before);
+  expect_no_flip(5, {0, 1, 2, 3, 4},
+                 records({kCorners[0], kCorners[1], kCorners[2], kCorners[3], {0.0f, 0.0f, 2.0f}}),
+                 {0, 1, 2, 1, 0, 3, 2, 3, 4});
 }
 
 }  // namespace

@@ -118,7 +118,7 @@ Clustering adaptive_grid_clustering(const PreparedNode& node, std::size_t target
 // Triangles cluster_grid(node, g) would keep (before the rare drop of triangles whose corners
 // coincide after rounding), or an upper bound of them (`surviving`), without solving any
 // quadric: what the resolution searches evaluate.
-std::size_t count_grid_triangles(const PreparedNode& node, std::uint32_t g, SearchCount count = SearchCount::kept);
+std::size_t count_grid_triangles(const PreparedNode& node, std::uint32_t g, SearchCount count);
 // The resolution whose count (as `count` says) is at most `target` and is as fine as a short
 // search finds (at most 12 counts; it stops within 15% below the target; the count is nearly but
 // not exactly monotone in g); 1 when even g = 1 exceeds it.
