@@ -17,7 +17,8 @@ namespace {
 constexpr float kRidgeHeight = 0.5f;
 
 // The roof z = h (1 - |y|) over [-1, 1]^2 with its ridge on y = 0, as a (2n)^2 grid of quads
-// (positions only), and each vertex's cluster: the nearest of the quad corners below.
+// (positions only), and each vertex's cluster: the nearest of four quad corners (by default
+// those below).
 struct Roof {
   NodeMesh mesh;
   std::vector<std::uint32_t> vertex_cluster;
@@ -32,7 +33,7 @@ const std::array<std::array<float, 3>, 4> kCorners{{
     {1.0f, 0.0f, kRidgeHeight},
 }};
 
-Roof make_roof(int n) {
+Roof make_roof(int n, const std::array<std::array<float, 3>, 4>& corners = kCorners) {
   Roof roof;
   roof.mesh.layout = {false, false, false};
   const int side = 2 * n + 1;
@@ -45,7 +46,7 @@ Roof make_roof(int n) {
       std::uint32_t nearest = 0;
       float best = INFINITY;
       for (std::uint32_t c = 0; c < 4; ++c) {
-        const float dx = x - kCorners[c][0], dy = y - kCorners[c][1], dz = z - kCorners[c][2];
+        const float dx = x - corners[c][0], dy = y - corners[c][1], dz = z - corners[c][2];
         const float d2 = dx * dx + dy * dy + dz * dz;
         if (d2 < best) best = d2, nearest = c;
       }
@@ -107,6 +108,24 @@ TEST(DiagonalFlipTest, ADiagonalAlongTheRidgeStays) {
   const std::vector<std::uint32_t> corners{0, 1, 2, 1, 0, 3};
   ASSERT_TRUE(all_face_up(record, corners));
   expect_no_flip(4, {2, 3, 1, 0}, record, corners);
+}
+
+TEST(DiagonalFlipTest, NoFlipThatTurnsATriangleAway) {
+  // a bent quad on the roof whose other diagonal's midpoint is nearer the roof (0.019 against
+  // 0.082), but the flipped (a, d, c) would face more than 60 degrees away from the pair
+  const std::array<std::array<float, 3>, 4> quad{{
+      {-0.030f, 0.627f, 0.145f},
+      {0.722f, -0.112f, 0.414f},
+      {0.285f, 0.541f, 0.226f},
+      {-0.074f, 0.637f, 0.222f},
+  }};
+  const Roof roof = make_roof(8, quad);
+  const std::vector<std::uint32_t> wedge_cluster{0, 1, 2, 3};
+  const std::vector<float> record = records({quad[0], quad[1], quad[2], quad[3]});
+  std::vector<std::uint32_t> corners{0, 1, 2, 1, 0, 3};
+  ASSERT_TRUE(all_face_up(record, corners));
+  EXPECT_EQ(flip_diagonals({roof.mesh, roof.vertex_cluster, 4, wedge_cluster, record}, corners), 0u);
+  EXPECT_EQ(corners, (std::vector<std::uint32_t>{0, 1, 2, 1, 0, 3}));
 }
 
 TEST(DiagonalFlipTest, NoFlipAcrossAnAttributeSeam) {

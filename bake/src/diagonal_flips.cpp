@@ -14,6 +14,9 @@ namespace {
 // Bent pairs only: the two triangles' normals at least this far apart (cosine). Between nearly
 // coplanar triangles the diagonal hardly moves the surface.
 constexpr double kMinBendCosine = 0.98;
+// Each flipped triangle faces within 60 degrees of the pair it replaces (their summed normals):
+// a flip to a long diagonal across a concave quad would otherwise stand slivers off the surface.
+constexpr double kMinFacingCosine = 0.5;
 // A flip must lower the squared distance by this share, so that rounding never decides it.
 constexpr double kMinGain = 0.05;
 
@@ -107,7 +110,11 @@ std::size_t flip_diagonals(const FlipInput& in, std::vector<std::uint32_t>& corn
     // the flipped pair (a, d, c), (b, c, d) must face like the pair it replaces
     const Vec3d m0 = cross(sub(pd, pa), sub(pc, pa)), m1 = cross(sub(pc, pb), sub(pd, pb));
     const Vec3d facing{n0[0] + n1[0], n0[1] + n1[1], n0[2] + n1[2]};
-    if (!(dot(m0, facing) > 0.0 && dot(m1, facing) > 0.0)) continue;
+    const double facing_length = std::sqrt(dot(facing, facing));
+    auto faces_like_the_pair = [&](const Vec3d& m) {
+      return dot(m, facing) > kMinFacingCosine * std::sqrt(dot(m, m)) * facing_length;
+    };
+    if (!(faces_like_the_pair(m0) && faces_like_the_pair(m1))) continue;
 
     // squared distances of the diagonals' midpoints to the input triangles at the quad's four
     // clusters (each triangle once)

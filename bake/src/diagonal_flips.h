@@ -29,7 +29,8 @@ struct FlipInput {
 // Flips, in place, interior edges of `corners` (wedge triples of the output triangles) whose two
 // triangles (a, b, c) and (b, a, d) share both wedges of the edge a-b (no attribute seam) and
 // bend (normals more than ~11 degrees apart), when c-d joins two clusters no triangle joins yet,
-// the flipped pair (a, d, c), (b, c, d) faces like the pair, and the midpoint of c-d lies nearer
+// each of the flipped pair (a, d, c), (b, c, d) faces within 60 degrees of the pair's summed
+// normal (no sliver stood off the surface), and the midpoint of c-d lies nearer
 // the input than the midpoint of a-b (squared distance under 0.95x; the input triangles with a
 // corner in one of the four clusters). Each triangle flips at most once; edges are visited in
 // triangle order, so the result depends on the input only. The edges used an odd number of
