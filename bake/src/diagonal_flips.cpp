@@ -1,5 +1,4 @@
-// diagonal_flips.h: one pass over the output's edges with a cluster-pair edge table; the input
-// triangles around each cluster (CSR) are gathered once the first quad needs them.
+// diagonal_flips.h: one pass over the output's edges with a cluster-pair edge table.
 #include "diagonal_flips.h"
 
 #include <array>
@@ -25,47 +24,11 @@ struct EdgeUse {
   std::uint32_t corner[2] = {0, 0};  // the first two uses: 3 * triangle + k, the edge k -> k+1
 };
 
-// The input triangles with a corner in each cluster, a triangle once per distinct cluster of its
-// corners.
-struct ClusterFans {
-  std::vector<std::uint32_t> offset;
-  std::vector<std::uint32_t> triangle;
-
-  ClusterFans(const NodeMesh& input, std::span<const std::uint32_t> vertex_cluster, std::uint32_t cluster_count)
-      : offset(std::size_t{cluster_count} + 1, 0) {
-    auto for_clusters_of = [&](std::size_t t, auto&& f) {
-      const std::uint32_t* v = &input.indices[3 * t];
-      const std::uint32_t x = vertex_cluster[v[0]], y = vertex_cluster[v[1]], z = vertex_cluster[v[2]];
-      f(x);
-      if (y != x) f(y);
-      if (z != x && z != y) f(z);
-    };
-    const std::size_t triangles = input.triangle_count();
-    for (std::size_t t = 0; t < triangles; ++t) for_clusters_of(t, [&](std::uint32_t c) { ++offset[c + 1]; });
-    for (std::size_t c = 0; c < cluster_count; ++c) offset[c + 1] += offset[c];
-    triangle.resize(offset.back());
-    std::vector<std::uint32_t> fill(offset.begin(), offset.end() - 1);
-    for (std::size_t t = 0; t < triangles; ++t)
-      for_clusters_of(t, [&](std::uint32_t c) { triangle[fill[c]++] = static_cast<std::uint32_t>(t); });
-  }
-};
-
-Vec3d midpoint(const Vec3d& a, const Vec3d& b) { return {0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1]), 0.5 * (a[2] + b[2])}; }
-
 }  // namespace
 
-std::size_t flip_diagonals(const FlipInput& in, std::vector<std::uint32_t>& corners) {
-  const std::size_t stride = in.input.layout.floats();
+std::size_t flip_diagonals(const ClusteredOutput& out, std::vector<std::uint32_t>& corners) {
   const std::size_t triangle_count = corners.size() / 3;
-  auto position = [&](std::uint32_t wedge) {
-    const float* f = &in.wedge_record[wedge * stride];
-    return Vec3d{f[0], f[1], f[2]};
-  };
-  auto input_position = [&](std::uint32_t v) {
-    const float* f = &in.input.vertices[v * stride];
-    return Vec3d{f[0], f[1], f[2]};
-  };
-  auto cluster_of = [&](std::size_t corner) { return in.wedge_cluster[corners[corner]]; };
+  auto cluster_of = [&](std::size_t corner) { return out.wedge_cluster[corners[corner]]; };
   auto edge_key = [](std::uint32_t a, std::uint32_t b) {
     return a < b ? std::array<std::uint32_t, 2>{a, b} : std::array<std::uint32_t, 2>{b, a};
   };
@@ -85,7 +48,7 @@ std::size_t flip_diagonals(const FlipInput& in, std::vector<std::uint32_t>& corn
     ++use.uses;
   }
 
-  std::optional<ClusterFans> fans;
+  InputDistances input(out);
   std::vector<std::uint8_t> flipped(triangle_count, 0);
   std::size_t flips = 0;
   const std::size_t original_edges = edges.size();
@@ -100,10 +63,10 @@ std::size_t flip_diagonals(const FlipInput& in, std::vector<std::uint32_t>& corn
     const std::uint32_t a = at(t0, k0), b = at(t0, k0 + 1), c = at(t0, k0 + 2);
     if (at(t1, k1) != b || at(t1, k1 + 1) != a) continue;
     const std::uint32_t d = at(t1, k1 + 2);
-    const std::uint32_t cc = in.wedge_cluster[c], cd = in.wedge_cluster[d];
+    const std::uint32_t cc = out.wedge_cluster[c], cd = out.wedge_cluster[d];
     if (cc == cd || edge_of.find(edge_key(cc, cd)) != FlatHashMap<2>::kMissing) continue;
 
-    const Vec3d pa = position(a), pb = position(b), pc = position(c), pd = position(d);
+    const Vec3d pa = out.wedge_position(a), pb = out.wedge_position(b), pc = out.wedge_position(c), pd = out.wedge_position(d);
     const Vec3d n0 = cross(sub(pb, pa), sub(pc, pa)), n1 = cross(sub(pa, pb), sub(pd, pb));
     const double l0 = std::sqrt(dot(n0, n0)), l1 = std::sqrt(dot(n1, n1));
     if (!(l0 > 0.0 && l1 > 0.0) || dot(n0, n1) > kMinBendCosine * l0 * l1) continue;
@@ -117,22 +80,12 @@ std::size_t flip_diagonals(const FlipInput& in, std::vector<std::uint32_t>& corn
     if (!(faces_like_the_pair(m0) && faces_like_the_pair(m1))) continue;
 
     // squared distances of the diagonals' midpoints to the input triangles at the quad's four
-    // clusters (each triangle once)
-    if (!fans) fans.emplace(in.input, in.vertex_cluster, in.cluster_count);
-    const Vec3d mid_ab = midpoint(pa, pb), mid_cd = midpoint(pc, pd);
-    const std::array<std::uint32_t, 4> quad{in.wedge_cluster[a], in.wedge_cluster[b], cc, cd};
-    double before = INFINITY, after = INFINITY;
-    for (std::size_t q = 0; q < quad.size(); ++q)
-      for (std::uint32_t i = fans->offset[quad[q]]; i < fans->offset[quad[q] + 1]; ++i) {
-        const std::uint32_t* v = &in.input.indices[3 * std::size_t{fans->triangle[i]}];
-        bool seen = false;  // at an earlier cluster of the quad
-        for (std::size_t r = 0; r < q; ++r)
-          for (std::size_t k = 0; k < 3; ++k) seen = seen || in.vertex_cluster[v[k]] == quad[r];
-        if (seen) continue;
-        const Vec3d q0 = input_position(v[0]), q1 = input_position(v[1]), q2 = input_position(v[2]);
-        before = std::min(before, point_triangle_distance2(mid_ab, q0, q1, q2));
-        after = std::min(after, point_triangle_distance2(mid_cd, q0, q1, q2));
-      }
+    // clusters
+    const std::array<std::uint32_t, 4> quad{out.wedge_cluster[a], out.wedge_cluster[b], cc, cd};
+    const std::array<Vec3d, 2> mids{midpoint(pa, pb), midpoint(pc, pd)};
+    std::array<double, 2> distance2;
+    input.nearest2(quad, mids, distance2);
+    const double before = distance2[0], after = distance2[1];
     if (!(after < (1.0 - kMinGain) * before)) continue;
 
     corners[3 * t0] = a, corners[3 * t0 + 1] = d, corners[3 * t0 + 2] = c;

@@ -11,20 +11,12 @@
 
 #include <cstddef>
 #include <cstdint>
-#include <span>
 #include <vector>
 
-#include "octolod/formats/node_file.h"
+#include "clustered_output.h"
 
 namespace octolod::bake {
 
-struct FlipInput {
-  const NodeMesh& input;                          // the clustered mesh (model units)
-  std::span<const std::uint32_t> vertex_cluster;  // per input vertex
-  std::uint32_t cluster_count;
-  std::span<const std::uint32_t> wedge_cluster;   // per output wedge
-  std::span<const float> wedge_record;            // per output wedge: input.layout's floats
-};
 
 // Flips, in place, interior edges of `corners` (wedge triples of the output triangles) whose two
 // triangles (a, b, c) and (b, a, d) share both wedges of the edge a-b (no attribute seam) and
@@ -36,6 +28,6 @@ struct FlipInput {
 // triangle order, so the result depends on the input only. The edges used an odd number of
 // times (the boundary) do not change, so neither does crack-freedom; the triangle count does not
 // change. Returns the number of flips.
-std::size_t flip_diagonals(const FlipInput& in, std::vector<std::uint32_t>& corners);
+std::size_t flip_diagonals(const ClusteredOutput& out, std::vector<std::uint32_t>& corners);
 
 }  // namespace octolod::bake

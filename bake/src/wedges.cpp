@@ -9,7 +9,9 @@
 #include <numeric>
 
 #include "diagonal_flips.h"
+#include "point_triangle.h"
 #include "flat_hash.h"
+#include "folded_fans.h"
 #include "quadric.h"
 
 namespace octolod::bake {
@@ -29,10 +31,6 @@ struct Candidate {
   std::uint32_t first_like = kNoTriangle;      // the first source winding like the sorted triple
   std::uint32_t first_opposite = kNoTriangle;  // the first winding the other way
 };
-
-std::array<double, 3> cross(const std::array<double, 3>& a, const std::array<double, 3>& b) {
-  return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
-}
 
 // Per input triangle, an output triangle near its image under the clustering (for the error
 // bound): the image itself when it survived; else the first output triangle on one of the
@@ -450,7 +448,11 @@ ClusteredMesh build_clustered_mesh(const NodeMesh& mesh, std::span<const std::ar
   }
   std::vector<std::uint32_t> wedge_cluster(wedge_count);
   for (std::size_t w = 0; w < wedge_count; ++w) wedge_cluster[w] = static_cast<std::uint32_t>(order[w] >> 32);
-  flip_diagonals({mesh, cluster, clustering.count, wedge_cluster, wedge_record}, kept);
+  const ClusteredOutput clustered{mesh, cluster, clustering.count, wedge_cluster, wedge_record, wedge};
+  flip_diagonals(clustered, kept);
+  const FoldRepair folds = remove_folded_fans(clustered, kept);
+  for (std::uint32_t& o : output_of_candidate)
+    if (o != kNoTriangle) o = folds.index[o];
   std::vector<std::uint32_t> output_id(wedge_count, UINT32_MAX);
   for (std::uint32_t w : kept) output_id[w] = 0;
   std::uint32_t next = 0;
@@ -467,11 +469,13 @@ ClusteredMesh build_clustered_mesh(const NodeMesh& mesh, std::span<const std::ar
   result.vertex_cluster = cluster;
   result.fan_offset.assign(std::size_t{clustering.count} + 1, 0);
   for (std::uint32_t c : kept_cluster) ++result.fan_offset[c + 1];
+  for (auto [c, triangle] : folds.fan_extra) ++result.fan_offset[c + 1];
   for (std::size_t c = 0; c < clustering.count; ++c) result.fan_offset[c + 1] += result.fan_offset[c];
-  result.fan_triangle.resize(kept_cluster.size());
+  result.fan_triangle.resize(result.fan_offset.back());
   std::vector<std::uint32_t> fill(result.fan_offset.begin(), result.fan_offset.end() - 1);
   for (std::size_t i = 0; i < kept_cluster.size(); ++i)
     result.fan_triangle[fill[kept_cluster[i]]++] = static_cast<std::uint32_t>(i / 3);
+  for (auto [c, triangle] : folds.fan_extra) result.fan_triangle[fill[c]++] = triangle;
   result.nearby_output_triangle = nearby_output_triangles(mesh, cluster, kept_cluster, result.fan_offset,
                                                           result.fan_triangle, candidate_of_triangle,
                                                           output_of_candidate);

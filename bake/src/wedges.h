@@ -65,7 +65,8 @@ void place_representative(const double* quadric, const double* mean, const Clamp
 // first such source's wedges, the other copy the first opposite source's, wound the other way.
 // Triangles with two corners at bit-identical positions are dropped (their edges cancel mod 2).
 // Then the diagonals of bent quads that pass further from the input than the other diagonal
-// would are flipped (diagonal_flips.h; the boundary mod 2 does not change). Unused vertices are
+// would are flipped (diagonal_flips.h), and folded three-triangle fans replaced by their
+// neighbours' triangle (folded_fans.h); neither changes the boundary mod 2. Unused vertices are
 // removed; output vertices are in (cluster, smallest vertex id of the wedge) order.
 inline constexpr std::uint32_t kNoTriangle = 0xFFFFFFFFu;
 struct ClusteredMesh {
@@ -75,9 +76,10 @@ struct ClusteredMesh {
   // image vertex), kNoTriangle when there is none. Only a hint for hausdorff_upper_bound: any
   // output triangle gives a valid bound.
   std::vector<std::uint32_t> nearby_output_triangle;
-  // The fan of every cluster: the output triangles with a corner at it (CSR: fan_triangle
-  // [fan_offset[c], fan_offset[c+1])), and each input vertex's cluster: where the error bound
-  // looks for the output triangles nearest an input vertex.
+  // The fan of every cluster: the output triangles with a corner at it, and the replacement of
+  // a folded fan of one of its wedges (CSR: fan_triangle [fan_offset[c], fan_offset[c+1])), and
+  // each input vertex's cluster: where the error bound looks for the output triangles nearest an
+  // input vertex.
   std::vector<std::uint32_t> vertex_cluster;
   std::vector<std::uint32_t> fan_offset;
   std::vector<std::uint32_t> fan_triangle;

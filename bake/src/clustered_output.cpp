@@ -1,0 +1,53 @@
+// clustered_output.h: the input triangles per cluster, and brute-force nearest distances over
+// the few clusters a pass asks about (a quad's four, a fan's four: some 30 triangles).
+#include "clustered_output.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace octolod::bake {
+
+void InputDistances::gather() {
+  gathered_ = true;
+  const NodeMesh& input = out_.input;
+  offset_.assign(std::size_t{out_.cluster_count} + 1, 0);
+  auto for_clusters_of = [&](std::size_t t, auto&& f) {
+    const std::uint32_t* v = &input.indices[3 * t];
+    const std::uint32_t x = out_.vertex_cluster[v[0]], y = out_.vertex_cluster[v[1]], z = out_.vertex_cluster[v[2]];
+    f(x);
+    if (y != x) f(y);
+    if (z != x && z != y) f(z);
+  };
+  const std::size_t triangles = input.triangle_count();
+  for (std::size_t t = 0; t < triangles; ++t) for_clusters_of(t, [&](std::uint32_t c) { ++offset_[c + 1]; });
+  for (std::size_t c = 0; c < out_.cluster_count; ++c) offset_[c + 1] += offset_[c];
+  triangle_.resize(offset_.back());
+  std::vector<std::uint32_t> fill(offset_.begin(), offset_.end() - 1);
+  for (std::size_t t = 0; t < triangles; ++t)
+    for_clusters_of(t, [&](std::uint32_t c) { triangle_[fill[c]++] = static_cast<std::uint32_t>(t); });
+}
+
+void InputDistances::nearest2(std::span<const std::uint32_t> clusters, std::span<const Vec3d> points,
+                              std::span<double> distance2) {
+  if (!gathered_) gather();
+  const NodeMesh& input = out_.input;
+  const std::size_t stride = input.layout.floats();
+  auto position = [&](std::uint32_t v) {
+    const float* f = &input.vertices[v * stride];
+    return Vec3d{f[0], f[1], f[2]};
+  };
+  std::fill(distance2.begin(), distance2.end(), INFINITY);
+  for (std::size_t q = 0; q < clusters.size(); ++q)
+    for (std::uint32_t i = offset_[clusters[q]]; i < offset_[clusters[q] + 1]; ++i) {
+      const std::uint32_t* v = &input.indices[3 * std::size_t{triangle_[i]}];
+      bool seen = false;  // at an earlier cluster of the list
+      for (std::size_t r = 0; r < q; ++r)
+        for (std::size_t k = 0; k < 3; ++k) seen = seen || out_.vertex_cluster[v[k]] == clusters[r];
+      if (seen) continue;
+      const Vec3d q0 = position(v[0]), q1 = position(v[1]), q2 = position(v[2]);
+      for (std::size_t p = 0; p < points.size(); ++p)
+        distance2[p] = std::min(distance2[p], point_triangle_distance2(points[p], q0, q1, q2));
+    }
+}
+
+}  // namespace octolod::bake

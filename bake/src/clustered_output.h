@@ -1,0 +1,54 @@
+// What the passes after a vertex clustering's output rule (diagonal_flips.h, folded_fans.h) see:
+// the clustered input, its clusters, and the output's wedges; and the distances from points to
+// the input triangles around a few clusters, with which they judge a change.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <span>
+#include <vector>
+
+#include "octolod/formats/node_file.h"
+#include "point_triangle.h"
+
+namespace octolod::bake {
+
+struct ClusteredOutput {
+  const NodeMesh& input;                          // the clustered mesh (model units)
+  std::span<const std::uint32_t> vertex_cluster;  // per input vertex
+  std::uint32_t cluster_count;
+  std::span<const std::uint32_t> wedge_cluster;   // per output wedge
+  std::span<const float> wedge_record;            // per output wedge: input.layout's floats
+  std::span<const std::uint32_t> vertex_wedge;    // per input vertex: its wedge
+
+  Vec3d wedge_position(std::uint32_t wedge) const {
+    const float* f = &wedge_record[wedge * input.layout.floats()];
+    return {f[0], f[1], f[2]};
+  }
+};
+
+// Squared distances from points to the input triangles with a corner in given clusters. The
+// triangles of every cluster are gathered (CSR) at the first query, so a pass that asks nothing
+// pays nothing.
+class InputDistances {
+ public:
+  explicit InputDistances(const ClusteredOutput& out) : out_(out) {}
+
+  // distance2[i] = min over the input triangles with a corner in one of `clusters` (each
+  // counted once) of the squared distance from points[i] to it; +infinity when there are none.
+  void nearest2(std::span<const std::uint32_t> clusters, std::span<const Vec3d> points, std::span<double> distance2);
+
+ private:
+  void gather();
+
+  const ClusteredOutput& out_;
+  bool gathered_ = false;
+  std::vector<std::uint32_t> offset_;    // per cluster, into triangle_
+  std::vector<std::uint32_t> triangle_;  // a triangle once per distinct cluster of its corners
+};
+
+inline Vec3d midpoint(const Vec3d& a, const Vec3d& b) {
+  return {0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1]), 0.5 * (a[2] + b[2])};
+}
+
+}  // namespace octolod::bake
