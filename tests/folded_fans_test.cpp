@@ -85,6 +85,21 @@ TEST(FoldedFanTest, AnUnfoldedFanStays) {
   EXPECT_TRUE(done.fan_extra.empty());
 }
 
+TEST(FoldedFanTest, AFanOfMoreThanThreeNeighboursStays) {
+  // v's three triangles reach five neighbours (two of them near u2 and u3, wedges 4 and 5 of
+  // their own clusters): not a closed fan, nothing to replace
+  const Square square = make_square();
+  std::vector<float> record = records({1.2f, 1.2f, 0.3f});
+  record.insert(record.end(), {0.9f, 0.1f, 0.0f, 0.1f, 0.9f, 0.0f});
+  std::vector<std::uint32_t> corners{3, 0, 1, 3, 4, 2, 3, 5, 0};
+  const std::vector<std::uint32_t> before = corners;
+  static const std::vector<std::uint32_t> wedge_cluster{0, 1, 2, 3, 4, 5};
+  const FoldRepair done = remove_folded_fans(
+      {square.mesh, square.vertex_cluster, 6, wedge_cluster, record, square.vertex_cluster}, corners);
+  EXPECT_EQ(corners, before);
+  EXPECT_TRUE(done.fan_extra.empty());
+}
+
 TEST(FoldedFanTest, NoReplacementWhereTheNeighboursHaveATriangle) {
   const Square square = make_square();
   const std::vector<float> record = records({1.2f, 1.2f, 0.3f});

@@ -89,7 +89,7 @@ FoldRepair remove_folded_fans(const ClusteredOutput& out, std::vector<std::uint3
     std::array<int, 3> uses{};
     std::size_t neighbours = 0;
     auto count = [&](std::uint32_t wedge) {
-      for (std::size_t k = 0; k < neighbours; ++k)
+      for (std::size_t k = 0; k < std::min<std::size_t>(neighbours, 3); ++k)
         if (out.wedge_cluster[neighbour[k]] == out.wedge_cluster[wedge]) {
           ++uses[k];
           return;
