@@ -79,13 +79,19 @@ bool all_face_up(const std::vector<float>& record, const std::vector<std::uint32
   return true;
 }
 
+// flip_diagonals on a clustered output.
+std::size_t flip(const ClusteredOutput& out, std::vector<std::uint32_t>& corners) {
+  InputDistances input(out);
+  return flip_diagonals(input, corners);
+}
+
 // flip_diagonals on the roof with these wedges (clusters, positions) and triangles: no flip,
 // the triangles unchanged.
 void expect_no_flip(std::uint32_t cluster_count, const std::vector<std::uint32_t>& wedge_cluster,
                     const std::vector<float>& record, std::vector<std::uint32_t> corners) {
   const Roof roof = make_roof(8);
   const std::vector<std::uint32_t> before = corners;
-  EXPECT_EQ(flip_diagonals({roof.mesh, roof.vertex_cluster, cluster_count, wedge_cluster, record, {}}, corners), 0u);
+  EXPECT_EQ(flip({roof.mesh, roof.vertex_cluster, cluster_count, wedge_cluster, record, {}}, corners), 0u);
   EXPECT_EQ(corners, before);
 }
 
@@ -96,7 +102,7 @@ TEST(DiagonalFlipTest, ADiagonalUnderTheRidgeIsFlippedOntoIt) {
   // (a, b, c) and (b, a, d): the diagonal a-b crosses the ridge, its midpoint h below it
   std::vector<std::uint32_t> corners{0, 1, 2, 1, 0, 3};
   ASSERT_TRUE(all_face_up(record, corners));
-  EXPECT_EQ(flip_diagonals({roof.mesh, roof.vertex_cluster, 4, wedge_cluster, record, {}}, corners), 1u);
+  EXPECT_EQ(flip({roof.mesh, roof.vertex_cluster, 4, wedge_cluster, record, {}}, corners), 1u);
   // now (a, d, c) and (b, c, d): the diagonal c-d runs along the ridge
   EXPECT_EQ(corners, (std::vector<std::uint32_t>{0, 3, 2, 1, 2, 3}));
   EXPECT_TRUE(all_face_up(record, corners));
@@ -124,7 +130,7 @@ TEST(DiagonalFlipTest, NoFlipThatTurnsATriangleAway) {
   const std::vector<float> record = records({quad[0], quad[1], quad[2], quad[3]});
   std::vector<std::uint32_t> corners{0, 1, 2, 1, 0, 3};
   ASSERT_TRUE(all_face_up(record, corners));
-  EXPECT_EQ(flip_diagonals({roof.mesh, roof.vertex_cluster, 4, wedge_cluster, record, {}}, corners), 0u);
+  EXPECT_EQ(flip({roof.mesh, roof.vertex_cluster, 4, wedge_cluster, record, {}}, corners), 0u);
   EXPECT_EQ(corners, (std::vector<std::uint32_t>{0, 1, 2, 1, 0, 3}));
 }
 

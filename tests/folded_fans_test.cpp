@@ -54,10 +54,15 @@ std::vector<float> records(const std::array<float, 3>& v) {
   return out;
 }
 
+// remove_folded_fans on a clustered output.
+FoldRepair remove_folds(const ClusteredOutput& out, std::vector<std::uint32_t>& corners) {
+  InputDistances input(out);
+  return remove_folded_fans(input, corners);
+}
+
 FoldRepair repair(const Square& square, const std::vector<float>& record, std::vector<std::uint32_t>& corners) {
   static const std::vector<std::uint32_t> wedge_cluster{0, 1, 2, 3};
-  return remove_folded_fans(
-      {square.mesh, square.vertex_cluster, 4, wedge_cluster, record, square.vertex_cluster}, corners);
+  return remove_folds({square.mesh, square.vertex_cluster, 4, wedge_cluster, record, square.vertex_cluster}, corners);
 }
 
 TEST(FoldedFanTest, AFoldedFanIsReplacedByItsNeighboursTriangle) {
@@ -94,8 +99,8 @@ TEST(FoldedFanTest, AFanOfMoreThanThreeNeighboursStays) {
   std::vector<std::uint32_t> corners{3, 0, 1, 3, 4, 2, 3, 5, 0};
   const std::vector<std::uint32_t> before = corners;
   static const std::vector<std::uint32_t> wedge_cluster{0, 1, 2, 3, 4, 5};
-  const FoldRepair done = remove_folded_fans(
-      {square.mesh, square.vertex_cluster, 6, wedge_cluster, record, square.vertex_cluster}, corners);
+  const FoldRepair done =
+      remove_folds({square.mesh, square.vertex_cluster, 6, wedge_cluster, record, square.vertex_cluster}, corners);
   EXPECT_EQ(corners, before);
   EXPECT_TRUE(done.fan_extra.empty());
 }

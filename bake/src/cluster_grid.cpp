@@ -166,9 +166,7 @@ std::size_t count_kept_triangles(const PreparedNode& node, const std::vector<std
     const std::uint32_t* corner = &node.mesh().indices[3 * t];
     const std::uint32_t c0 = cluster[corner[0]], c1 = cluster[corner[1]], c2 = cluster[corner[2]];
     if (c0 == c1 || c1 == c2 || c0 == c2) continue;
-    std::array<std::uint32_t, 3> triple{c0, c1, c2};
-    std::sort(triple.begin(), triple.end());
-    counter.add(triple, winds_like_sorted(c0, c1, c2));
+    counter.add(sorted_triple(c0, c1, c2), winds_like_sorted(c0, c1, c2));
   }
   return counter.kept();
 }

@@ -28,11 +28,13 @@ struct ClusteredOutput {
 };
 
 // Squared distances from points to the input triangles with a corner in given clusters. The
-// triangles of every cluster are gathered (CSR) at the first query, so a pass that asks nothing
-// pays nothing.
+// triangles of every cluster are gathered (CSR) at the first query, so a step whose passes ask
+// nothing pays nothing, and the passes of one step share them. `out` must outlive it.
 class InputDistances {
  public:
   explicit InputDistances(const ClusteredOutput& out) : out_(out) {}
+
+  const ClusteredOutput& output() const { return out_; }
 
   // distance2[i] = min over the input triangles with a corner in one of `clusters` (each
   // counted once) of the squared distance from points[i] to it; +infinity when there are none.
@@ -46,9 +48,5 @@ class InputDistances {
   std::vector<std::uint32_t> offset_;    // per cluster, into triangle_
   std::vector<std::uint32_t> triangle_;  // a triangle once per distinct cluster of its corners
 };
-
-inline Vec3d midpoint(const Vec3d& a, const Vec3d& b) {
-  return {0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1]), 0.5 * (a[2] + b[2])};
-}
 
 }  // namespace octolod::bake

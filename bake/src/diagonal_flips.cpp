@@ -26,7 +26,8 @@ struct EdgeUse {
 
 }  // namespace
 
-std::size_t flip_diagonals(const ClusteredOutput& out, std::vector<std::uint32_t>& corners) {
+std::size_t flip_diagonals(InputDistances& input, std::vector<std::uint32_t>& corners) {
+  const ClusteredOutput& out = input.output();
   const std::size_t triangle_count = corners.size() / 3;
   auto cluster_of = [&](std::size_t corner) { return out.wedge_cluster[corners[corner]]; };
   auto edge_key = [](std::uint32_t a, std::uint32_t b) {
@@ -48,7 +49,6 @@ std::size_t flip_diagonals(const ClusteredOutput& out, std::vector<std::uint32_t
     ++use.uses;
   }
 
-  InputDistances input(out);
   std::vector<std::uint8_t> flipped(triangle_count, 0);
   std::size_t flips = 0;
   const std::size_t original_edges = edges.size();

@@ -71,19 +71,15 @@ class Bounder {
   // whose bound is at most `enough` are not refined further.
   double refine(const std::array<Vec, 3>& corners, const std::array<double, 3>& corner_distance,
                 std::vector<std::uint32_t> candidates, double enough, int depth) const {
-    const Vec centroid{(corners[0][0] + corners[1][0] + corners[2][0]) / 3.0,
-                       (corners[0][1] + corners[1][1] + corners[2][1]) / 3.0,
-                       (corners[0][2] + corners[1][2] + corners[2][2]) / 3.0};
-    candidates.push_back(nearest(centroid).first);
+    candidates.push_back(nearest(centroid(corners[0], corners[1], corners[2])).first);
     const double bound = corner_bound(corners, candidates);
     const double lower = std::max({corner_distance[0], corner_distance[1], corner_distance[2]});
     if (depth >= kMaxRefineDepth || bound <= enough || bound <= lower * 1.05) return bound;
     std::array<Vec, 3> mid;
     std::array<double, 3> mid_distance;
     for (int k = 0; k < 3; ++k) {
-      const Vec& a = corners[static_cast<std::size_t>(k)];
-      const Vec& b = corners[static_cast<std::size_t>((k + 1) % 3)];
-      mid[static_cast<std::size_t>(k)] = {(a[0] + b[0]) / 2, (a[1] + b[1]) / 2, (a[2] + b[2]) / 2};
+      mid[static_cast<std::size_t>(k)] =
+          midpoint(corners[static_cast<std::size_t>(k)], corners[static_cast<std::size_t>((k + 1) % 3)]);
       const auto [triangle, d] = nearest(mid[static_cast<std::size_t>(k)]);
       candidates.push_back(triangle);
       mid_distance[static_cast<std::size_t>(k)] = d;

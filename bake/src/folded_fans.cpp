@@ -7,6 +7,7 @@
 #include <optional>
 
 #include "flat_hash.h"
+#include "wedges.h"
 
 namespace octolod::bake {
 namespace {
@@ -14,12 +15,6 @@ namespace {
 // The replacement must lower the farthest squared distance by this share.
 constexpr double kMinGain = 0.05;
 constexpr std::uint32_t kNotReplaced = 0xFFFFFFFFu;
-
-std::array<std::uint32_t, 3> sorted_triple(std::uint32_t a, std::uint32_t b, std::uint32_t c) {
-  std::array<std::uint32_t, 3> t{a, b, c};
-  std::sort(t.begin(), t.end());
-  return t;
-}
 
 // The input vertices of every wedge: `vertex` in CSR order, the offsets returned.
 std::vector<std::uint32_t> wedge_vertices(const ClusteredOutput& out, std::vector<std::uint32_t>& vertex) {
@@ -34,7 +29,8 @@ std::vector<std::uint32_t> wedge_vertices(const ClusteredOutput& out, std::vecto
 
 }  // namespace
 
-FoldRepair remove_folded_fans(const ClusteredOutput& out, std::vector<std::uint32_t>& corners) {
+FoldRepair remove_folded_fans(InputDistances& input, std::vector<std::uint32_t>& corners) {
+  const ClusteredOutput& out = input.output();
   const std::size_t triangle_count = corners.size() / 3;
   const std::size_t wedge_count = out.wedge_cluster.size();
   auto cluster_of = [&](std::size_t corner) { return out.wedge_cluster[corners[corner]]; };
@@ -64,7 +60,6 @@ FoldRepair remove_folded_fans(const ClusteredOutput& out, std::vector<std::uint3
   std::vector<std::uint8_t> changed(triangle_count, 0);
   std::vector<std::uint32_t> replaced_by(triangle_count, kNotReplaced);  // a removed one's replacement
   std::vector<std::array<std::uint32_t, 2>> replaced;  // (v's cluster, replacement) per fan
-  InputDistances input(out);
   std::optional<std::vector<std::uint32_t>> wedge_offset;  // the input vertices of every wedge
   std::vector<std::uint32_t> wedge_vertex;
   for (std::uint32_t v = 0; v < wedge_count; ++v) {
@@ -131,8 +126,7 @@ FoldRepair remove_folded_fans(const ClusteredOutput& out, std::vector<std::uint3
     const Vec3d pv = out.wedge_position(v), pa = out.wedge_position(a), pb = out.wedge_position(b),
                 pc = out.wedge_position(c);
     const std::array<std::uint32_t, 4> clusters{out.wedge_cluster[v], triple[0], triple[1], triple[2]};
-    const Vec3d centroid{(pa[0] + pb[0] + pc[0]) / 3.0, (pa[1] + pb[1] + pc[1]) / 3.0, (pa[2] + pb[2] + pc[2]) / 3.0};
-    const std::array<Vec3d, 4> points{midpoint(pv, pa), midpoint(pv, pb), midpoint(pv, pc), centroid};
+    const std::array<Vec3d, 4> points{midpoint(pv, pa), midpoint(pv, pb), midpoint(pv, pc), centroid(pa, pb, pc)};
     std::array<double, 4> distance2;
     input.nearest2(clusters, points, distance2);
     const double before = std::max({distance2[0], distance2[1], distance2[2]});

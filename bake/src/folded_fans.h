@@ -16,7 +16,7 @@
 
 namespace octolod::bake {
 
-// Replaces, in `corners` (wedge triples of the output triangles), each folded fan: a wedge with
+// Replaces, in `corners` (wedge triples of input.output()'s triangles), each folded fan: a wedge with
 // exactly three triangles, (v, u1, u2), (v, u2, u3), (v, u3, u1) in some windings, where some
 // spoke v-ui runs the same way in both of its triangles, and no triangle joins the clusters of
 // u1, u2, u3 yet. The replacement (u1, u2, u3), of each neighbour's first wedge met, is wound
@@ -33,6 +33,6 @@ struct FoldRepair {
   // the replacement, which has no corner in their cluster; the error bound's fans take it too
   std::vector<std::array<std::uint32_t, 2>> fan_extra;
 };
-FoldRepair remove_folded_fans(const ClusteredOutput& out, std::vector<std::uint32_t>& corners);
+FoldRepair remove_folded_fans(InputDistances& input, std::vector<std::uint32_t>& corners);
 
 }  // namespace octolod::bake

@@ -1,5 +1,5 @@
-// Exact point-to-triangle distance in double, for the bake's geometric tests (error bounds,
-// diagonal flips). Positions in any one frame (model units or a node's local coordinates).
+// Exact point-to-triangle distance in double, and the few vector helpers around it, for the
+// bake's geometric tests (error bounds, diagonal flips, folded fans). Positions in any one frame (model units or a node's local coordinates).
 #pragma once
 
 #include <algorithm>
@@ -13,6 +13,12 @@ inline Vec3d sub(const Vec3d& a, const Vec3d& b) { return {a[0] - b[0], a[1] - b
 inline double dot(const Vec3d& a, const Vec3d& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
 inline Vec3d cross(const Vec3d& a, const Vec3d& b) {
   return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
+}
+inline Vec3d midpoint(const Vec3d& a, const Vec3d& b) {
+  return {(a[0] + b[0]) / 2, (a[1] + b[1]) / 2, (a[2] + b[2]) / 2};
+}
+inline Vec3d centroid(const Vec3d& a, const Vec3d& b, const Vec3d& c) {
+  return {(a[0] + b[0] + c[0]) / 3.0, (a[1] + b[1] + c[1]) / 3.0, (a[2] + b[2] + c[2]) / 3.0};
 }
 
 // Squared distance from p to triangle (a,b,c), Ericson 2005, 5.1.5 ClosestPtPointTriangle; a

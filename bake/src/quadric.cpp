@@ -314,8 +314,7 @@ void minimize_quadric(int n, const double* q, const double* mean, double* v) {
 
 namespace {
 
-// add_free_block for a dimension known at compile time: the loops unroll (it runs once per
-// solved corner of every triangle of a node).
+// add_free_block for a dimension known at compile time: the loops unroll.
 template <int n>
 void add_free_block_fixed(int k, const double* q, const double* x, double* acc) {
   const int m = n - k;

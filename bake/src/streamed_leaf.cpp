@@ -375,8 +375,7 @@ class StreamedLeafBuilder {
           wedges.add(wedge[k], a, p[k] + 3);
         }
         if (id[0] == id[1] || id[1] == id[2] || id[0] == id[2]) continue;
-        std::array<std::uint32_t, 3> sorted = id;
-        std::sort(sorted.begin(), sorted.end());
+        const std::array<std::uint32_t, 3> sorted = sorted_triple(id[0], id[1], id[2]);
         const bool even = winds_like_sorted(id[0], id[1], id[2]);
         // the count pass at g saw the same distinct triples (its keys, one to one with the ids)
         assert((candidates.size() < 2 * limit || candidate_of.find(sorted) != FlatHashMap<3>::kMissing) &&

@@ -9,9 +9,9 @@
 #include <numeric>
 
 #include "diagonal_flips.h"
-#include "point_triangle.h"
 #include "flat_hash.h"
 #include "folded_fans.h"
+#include "point_triangle.h"
 #include "quadric.h"
 
 namespace octolod::bake {
@@ -413,12 +413,10 @@ ClusteredMesh build_clustered_mesh(const NodeMesh& mesh, std::span<const std::ar
       const std::uint32_t* corner = &mesh.indices[3 * t];
       const std::uint32_t c0 = cluster[corner[0]], c1 = cluster[corner[1]], c2 = cluster[corner[2]];
       if (c0 == c1 || c1 == c2 || c0 == c2) continue;
-      std::array<std::uint32_t, 3> sorted{c0, c1, c2};
-      std::sort(sorted.begin(), sorted.end());
       const bool even = winds_like_sorted(c0, c1, c2);
       bool inserted = false;
-      const std::uint32_t index =
-          candidate_of.find_or_insert(sorted, static_cast<std::uint32_t>(candidates.size()), inserted);
+      const std::uint32_t index = candidate_of.find_or_insert(
+          sorted_triple(c0, c1, c2), static_cast<std::uint32_t>(candidates.size()), inserted);
       if (inserted) candidates.emplace_back();
       candidate_of_triangle[t] = index;
       Candidate& candidate = candidates[index];
@@ -449,8 +447,9 @@ ClusteredMesh build_clustered_mesh(const NodeMesh& mesh, std::span<const std::ar
   std::vector<std::uint32_t> wedge_cluster(wedge_count);
   for (std::size_t w = 0; w < wedge_count; ++w) wedge_cluster[w] = static_cast<std::uint32_t>(order[w] >> 32);
   const ClusteredOutput clustered{mesh, cluster, clustering.count, wedge_cluster, wedge_record, wedge};
-  flip_diagonals(clustered, kept);
-  const FoldRepair folds = remove_folded_fans(clustered, kept);
+  InputDistances input(clustered);
+  flip_diagonals(input, kept);
+  const FoldRepair folds = remove_folded_fans(input, kept);
   for (std::uint32_t& o : output_of_candidate)
     if (o != kNoTriangle) o = folds.index[o];
   std::vector<std::uint32_t> output_id(wedge_count, UINT32_MAX);

@@ -9,6 +9,7 @@
 // wedge one attribute vector (from its own generalized quadric with that position fixed).
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <cstdint>
 #include <optional>
@@ -72,9 +73,9 @@ inline constexpr std::uint32_t kNoTriangle = 0xFFFFFFFFu;
 struct ClusteredMesh {
   NodeMesh mesh;
   // Per input triangle: an output triangle at or next to its image (the image itself when it
-  // survived, or the triangle a flip made of it; else one sharing an image edge, else one at an
-  // image vertex), kNoTriangle when there is none. Only a hint for hausdorff_upper_bound: any
-  // output triangle gives a valid bound.
+  // survived, or the triangle a flip made of it, or the replacement of the folded fan it was in;
+  // else one sharing an image edge, else one at an image vertex), kNoTriangle when there is none.
+  // Only a hint for hausdorff_upper_bound: any output triangle gives a valid bound.
   std::vector<std::uint32_t> nearby_output_triangle;
   // The fan of every cluster: the output triangles with a corner at it, and the replacement of
   // a folded fan of one of its wedges (CSR: fan_triangle [fan_offset[c], fan_offset[c+1])), and
@@ -106,6 +107,13 @@ double surface_area(std::span<const std::array<double, 3>> face_normal);
 template <class Id>
 bool winds_like_sorted(Id c0, Id c1, Id c2) {
   return (c0 < c1) + (c1 < c2) + (c2 < c0) == 2;
+}
+
+// The cluster triple (c0, c1, c2) in ascending order: the key of the output rule's tables.
+inline std::array<std::uint32_t, 3> sorted_triple(std::uint32_t c0, std::uint32_t c1, std::uint32_t c2) {
+  std::array<std::uint32_t, 3> triple{c0, c1, c2};
+  std::sort(triple.begin(), triple.end());
+  return triple;
 }
 
 // How many triangles build_clustered_mesh keeps for one cluster triple: one when its sources
