@@ -1,22 +1,28 @@
 // Conservative one-sided Hausdorff bound from an input mesh to its simplification (seed 3.5.3).
 //
-// For a fixed output triangle T', x -> dist(x, T') is convex, so over an input triangle t it is
-// largest at one of t's corners: max_{x in t} dist(x, output) <= min over T' of max over t's
-// corners of dist(corner, T'). Candidates T' are the output triangles nearest to t's corners (and,
-// when refining, to its centroid), found with the closest-point BVH of measure/. Where the bound
-// of t is far above the distances of its corners (t spans a ridge of the output, say), t is split
-// in four (midpoints) and the bound is the max over the parts, a few levels deep. Only triangles
-// whose bound exceeds the best total so far are refined — the total is a max — so the cost is a
-// little more than one BVH query per input vertex. With the hints of a vertex clustering
-// (error_bound.h, ImageHints) the candidates come from the clustering instead and the queries
-// are only the fallback.
+// For a fixed output triangle T, x -> dist(x, T) is convex, so over a convex piece of an input
+// triangle it is largest at one of the piece's corners. The bound of an input triangle t is the
+// max over pieces that cover t, each measured against one output triangle:
+// - one piece, t itself, against the best single candidate (min over T of the max over t's
+//   corners): tight when t lies over one output triangle, but where t reaches across an output
+//   edge or vertex it is about how far t reaches, a step's cell, rather than how far the output
+//   is from the surface (7-10x the true distance on a rock: docs/benchmarks.md);
+// - the prism pieces: the prism over each candidate T along t's normal cuts from t the convex
+//   piece that lies straight above or below T. When the candidates facing like t tile its
+//   shadow (the pieces' areas add up to t's), this is within a few percent of the true distance;
+// - else t is split in four (midpoints), a few levels deep, with closest-point queries
+//   (measure::TriangleBvh) adding the output triangles nearest to each part.
+// Only triangles whose cheap single-candidate bound exceeds the total so far get a closer look,
+// worst first: the total is a max. Candidates come from the clustering's hints (error_bound.h,
+// ImageHints): the triangle's image, each corner's nearest image, the fans around its corners'
+// clusters. The version without hints takes every corner's nearest triangle by query.
 #include "error_bound.h"
 
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <limits>
-#include <tuple>
+#include <optional>
 #include <utility>
 #include <vector>
 
@@ -27,248 +33,435 @@ namespace octolod::bake {
 namespace {
 
 using Vec = Vec3d;
+using Triangle = std::array<Vec, 3>;
 
 constexpr int kMaxRefineDepth = 4;
+// A split part is not split further when its bound is within 5% of its corners' distances
+// (squared here): no split goes below those.
+constexpr double kCloseEnough2 = 1.05 * 1.05;
+// A prism bound within twice its part's corner distances is taken as it is (the corners'
+// distances are a lower bound of the true one); above, the output may stand steep under the
+// part (the pieces lie straight over their triangles but far from them), and the split bound
+// with closest-point queries is tried as well.
+constexpr double kPrismTrusted2 = 2.0 * 2.0;
+// The prism pieces cover a part when their areas add up to its area within this share.
+constexpr double kCoverTolerance = 1e-9;
+constexpr double kInfinity = std::numeric_limits<double>::infinity();
+constexpr std::uint32_t kNone = 0xFFFFFFFFu;
 
-constexpr std::uint32_t kNoHint = 0xFFFFFFFFu;
+std::vector<Triangle> triangle_corners(const NodeMesh& mesh) {
+  const std::size_t stride = mesh.layout.floats();
+  std::vector<Triangle> corners(mesh.triangle_count());
+  for (std::size_t t = 0; t < corners.size(); ++t)
+    for (std::size_t k = 0; k < 3; ++k) {
+      const float* f = &mesh.vertices[mesh.indices[3 * t + k] * stride];
+      corners[t][k] = {f[0], f[1], f[2]};
+    }
+  return corners;
+}
 
-class Bounder {
+// |x - corner| bounds dist(x, T) from above: a corner of T within sqrt(limit2) of x settles x.
+bool near_corner(const Vec& x, const Triangle& tri, double limit2) {
+  for (const Vec& corner : tri) {
+    const Vec d = sub(x, corner);
+    if (dot(d, d) <= limit2) return true;
+  }
+  return false;
+}
+
+std::uint32_t closest_triangle(const measure::TriangleBvh& bvh, const Vec& p) {
+  return bvh.closest(glm::vec3(static_cast<float>(p[0]), static_cast<float>(p[1]), static_cast<float>(p[2]))).triangle;
+}
+
+// Points and convex polygons in a plane's coordinates (a part of an input triangle clipped by
+// a prism's sides).
+using Point2 = std::array<double, 2>;
+struct Polygon {
+  std::array<Point2, 9> corner;
+  std::size_t size = 0;
+};
+
+// Twice the signed area of (a, b, p): positive when p is left of a -> b.
+double left_of(const Point2& a, const Point2& b, const Point2& p) {
+  return (b[0] - a[0]) * (p[1] - a[1]) - (b[1] - a[1]) * (p[0] - a[0]);
+}
+
+// The part of `polygon` left of the line a -> b.
+Polygon clip(const Polygon& polygon, const Point2& a, const Point2& b) {
+  Polygon kept;
+  for (std::size_t k = 0; k < polygon.size; ++k) {
+    const Point2& p0 = polygon.corner[k];
+    const Point2& p1 = polygon.corner[(k + 1) % polygon.size];
+    const double h0 = left_of(a, b, p0), h1 = left_of(a, b, p1);
+    if (h0 >= 0.0) kept.corner[kept.size++] = p0;
+    if ((h0 > 0.0 && h1 < 0.0) || (h0 < 0.0 && h1 > 0.0)) {
+      const double t = h0 / (h0 - h1);
+      kept.corner[kept.size++] = {p0[0] + t * (p1[0] - p0[0]), p0[1] + t * (p1[1] - p0[1])};
+    }
+  }
+  return kept;
+}
+
+// Bounds of input triangles (and parts of them) against candidate output triangles, in squared
+// distances.
+class PartBounder {
  public:
-  Bounder(const NodeMesh& output)
-      : output_(output),
-        stride_(output.layout.floats()),
-        bvh_(output.vertices, output.layout.floats(), output.indices) {}
-
-  Vec position(std::uint32_t output_triangle, int corner) const {
-    const float* f = &output_.vertices[output_.indices[3 * std::size_t{output_triangle} + static_cast<std::size_t>(corner)] * stride_];
-    return {f[0], f[1], f[2]};
-  }
-  double distance(const Vec& p, std::uint32_t output_triangle) const {
-    return std::sqrt(point_triangle_distance2(p, position(output_triangle, 0), position(output_triangle, 1),
-                                              position(output_triangle, 2)));
-  }
-  // Nearest output triangle to p and the distance to it (double precision).
-  std::pair<std::uint32_t, double> nearest(const Vec& p) const {
-    const auto hit = bvh_.closest(glm::vec3(static_cast<float>(p[0]), static_cast<float>(p[1]), static_cast<float>(p[2])));
-    return {hit.triangle, distance(p, hit.triangle)};
+  explicit PartBounder(std::span<const Triangle> output) : output_(output) {
+    normal_.reserve(output.size());
+    sphere_.reserve(output.size());
+    for (const Triangle& t : output) {
+      normal_.push_back(cross(sub(t[1], t[0]), sub(t[2], t[0])));
+      const Vec center = centroid(t[0], t[1], t[2]);
+      double radius2 = 0.0;
+      for (const Vec& c : t) radius2 = std::max(radius2, dot(sub(c, center), sub(c, center)));
+      sphere_.push_back({center, std::sqrt(radius2) * (1.0 + 1e-9)});
+    }
   }
 
-  // min over candidates of the max distance of the corners to it.
-  double corner_bound(const std::array<Vec, 3>& corners, const std::vector<std::uint32_t>& candidates) const {
-    double best = std::numeric_limits<double>::infinity();
+  double distance2(const Vec& p, std::uint32_t triangle) const {
+    const Triangle& t = output_[triangle];
+    return point_triangle_distance2(p, t[0], t[1], t[2]);
+  }
+
+  double nearest2(const Vec& p, std::span<const std::uint32_t> candidates) const {
+    double best2 = kInfinity;
+    for (std::uint32_t candidate : candidates) best2 = std::min(best2, distance2(p, candidate));
+    return best2;
+  }
+
+  // min over candidates of the max over the corners of the squared distance to it.
+  double single_bound2(const Triangle& part, std::span<const std::uint32_t> candidates) const {
+    double best2 = kInfinity;
     for (std::uint32_t candidate : candidates) {
-      double worst = 0.0;
-      for (const Vec& c : corners) {
-        worst = std::max(worst, distance(c, candidate));
-        if (worst >= best) break;
+      double worst2 = 0.0;
+      for (const Vec& c : part) {
+        worst2 = std::max(worst2, distance2(c, candidate));
+        if (worst2 >= best2) break;
       }
-      best = std::min(best, worst);
+      best2 = std::min(best2, worst2);
     }
-    return best;
+    return best2;
   }
 
-  // Bound of the triangle `corners` whose corners are at distances `corner_distance`; parts
-  // whose bound is at most `enough` are not refined further.
-  double refine(const std::array<Vec, 3>& corners, const std::array<double, 3>& corner_distance,
-                std::vector<std::uint32_t> candidates, double enough, int depth) const {
-    candidates.push_back(nearest(centroid(corners[0], corners[1], corners[2])).first);
-    const double bound = corner_bound(corners, candidates);
-    const double lower = std::max({corner_distance[0], corner_distance[1], corner_distance[2]});
-    if (depth >= kMaxRefineDepth || bound <= enough || bound <= lower * 1.05) return bound;
-    std::array<Vec, 3> mid;
-    std::array<double, 3> mid_distance;
-    for (int k = 0; k < 3; ++k) {
-      mid[static_cast<std::size_t>(k)] =
-          midpoint(corners[static_cast<std::size_t>(k)], corners[static_cast<std::size_t>((k + 1) % 3)]);
-      const auto [triangle, d] = nearest(mid[static_cast<std::size_t>(k)]);
-      candidates.push_back(triangle);
-      mid_distance[static_cast<std::size_t>(k)] = d;
+  // max over the prism pieces of the distance at their corners to their candidate; +infinity
+  // when the pieces do not cover the part (a gap in the candidates, or an overlap, as over a
+  // fold of the output: either changes the sum of the pieces' areas). A piece's points lie
+  // straight above or below its triangle, so their distance along the part's normal bounds
+  // their distance to it, and is affine: corners whose such distance is within `enough2` are
+  // not measured exactly (they cannot raise the total).
+  double prism_bound2(const Triangle& part, std::span<const std::uint32_t> candidates, double enough2) const {
+    // the part's plane: origin part[0], orthonormal axes x (along its first edge) and y
+    const Vec edge0 = sub(part[1], part[0]), edge1 = sub(part[2], part[0]);
+    const Vec n = cross(edge0, edge1);
+    const double twice_area = std::sqrt(dot(n, n));
+    const double length0 = std::sqrt(dot(edge0, edge0));
+    if (!(twice_area > 0.0 && length0 > 0.0)) return kInfinity;
+    const Vec unit{n[0] / twice_area, n[1] / twice_area, n[2] / twice_area};
+    const Vec x_axis{edge0[0] / length0, edge0[1] / length0, edge0[2] / length0};
+    const Vec y_axis = cross(unit, x_axis);
+    const Polygon part2d{{{{0.0, 0.0}, {length0, 0.0}, {dot(edge1, x_axis), dot(edge1, y_axis)}}}, 3};
+    // the part's bounding sphere (around its centroid): a candidate whose sphere is farther from
+    // it across the normal than both radii cannot reach under it
+    const Vec middle = centroid(part[0], part[1], part[2]);
+    double part_radius2 = 0.0;
+    for (const Vec& c : part) {
+      const Vec d = sub(c, middle);
+      part_radius2 = std::max(part_radius2, dot(d, d));
     }
-    std::sort(candidates.begin(), candidates.end());
-    candidates.erase(std::unique(candidates.begin(), candidates.end()), candidates.end());
-    const std::array<std::array<Vec, 3>, 4> parts{{{corners[0], mid[0], mid[2]},
-                                                   {mid[0], corners[1], mid[1]},
-                                                   {mid[2], mid[1], corners[2]},
-                                                   {mid[0], mid[1], mid[2]}}};
-    const std::array<std::array<double, 3>, 4> part_distance{{{corner_distance[0], mid_distance[0], mid_distance[2]},
-                                                              {mid_distance[0], corner_distance[1], mid_distance[1]},
-                                                              {mid_distance[2], mid_distance[1], corner_distance[2]},
-                                                              {mid_distance[0], mid_distance[1], mid_distance[2]}}};
-    double result = 0.0;
-    for (std::size_t i = 0; i < 4; ++i) {
-      result = std::max(result, refine(parts[i], part_distance[i], candidates, std::max(enough, result), depth + 1));
+    const double part_radius = std::sqrt(part_radius2);
+    double covered = 0.0, worst2 = 0.0;
+    for (std::uint32_t candidate : candidates) {
+      const Sphere& sphere = sphere_[candidate];
+      const Vec apart = sub(sphere.center, middle);
+      const double across2 = dot(apart, apart) - dot(apart, unit) * dot(apart, unit);
+      const double reach = part_radius + sphere.radius;
+      if (across2 > reach * reach) continue;
+      const Triangle& tri = output_[candidate];
+      const Vec& normal = normal_[candidate];
+      const double facing = dot(normal, unit);
+      if (!(facing > 0.0)) continue;  // faces away, or stands on edge: its prism is flat
+      Point2 corner[3];
+      for (std::size_t j = 0; j < 3; ++j) {
+        const Vec r = sub(tri[j], part[0]);
+        corner[j] = {dot(r, x_axis), dot(r, y_axis)};
+      }
+      // the part against the prism's sides (the projected triangle winds counter-clockwise)
+      std::array<std::array<double, 3>, 3> side;
+      bool empty = false, inside = true;
+      for (std::size_t e = 0; e < 3 && !empty; ++e) {
+        for (std::size_t k = 0; k < 3; ++k) side[e][k] = left_of(corner[e], corner[(e + 1) % 3], part2d.corner[k]);
+        empty = side[e][0] < 0.0 && side[e][1] < 0.0 && side[e][2] < 0.0;
+        inside = inside && side[e][0] >= 0.0 && side[e][1] >= 0.0 && side[e][2] >= 0.0;
+      }
+      if (empty) continue;
+      Polygon piece = part2d;
+      for (std::size_t e = 0; e < 3 && !inside && piece.size > 0; ++e) piece = clip(piece, corner[e], corner[(e + 1) % 3]);
+      if (piece.size < 3) continue;
+      for (std::size_t k = 1; k + 1 < piece.size; ++k) covered += left_of(piece.corner[0], piece.corner[k], piece.corner[k + 1]);
+      // distance along the part's normal to the candidate's plane: affine in the plane's coordinates
+      const double along0 = dot(sub(part[0], tri[0]), normal) / facing;
+      const double along_x = dot(x_axis, normal) / facing, along_y = dot(y_axis, normal) / facing;
+      for (std::size_t k = 0; k < piece.size; ++k) {
+        const Point2& q = piece.corner[k];
+        const double along = along0 + q[0] * along_x + q[1] * along_y;
+        if (along * along <= enough2) {
+          worst2 = std::max(worst2, along * along);
+          continue;
+        }
+        const Vec x{part[0][0] + q[0] * x_axis[0] + q[1] * y_axis[0], part[0][1] + q[0] * x_axis[1] + q[1] * y_axis[1],
+                    part[0][2] + q[0] * x_axis[2] + q[1] * y_axis[2]};
+        worst2 = std::max(worst2, distance2(x, candidate));
+      }
     }
-    return std::min(result, bound);
+    return std::abs(covered - twice_area) <= kCoverTolerance * twice_area ? worst2 : kInfinity;
+  }
+
+  // Bound of `part`: the prism pieces when they cover it, else the single candidate, split
+  // while that can lower it and it exceeds `enough2`. With `queries`, the output triangles
+  // nearest to the corners and the centroid of the part (and so of every split part) join the
+  // candidates.
+  double bound2(const Triangle& part, std::span<const std::uint32_t> candidates, double enough2,
+                const measure::TriangleBvh* queries, int depth = 0) const {
+    std::vector<std::uint32_t> extended;
+    if (queries != nullptr) {
+      extended.assign(candidates.begin(), candidates.end());
+      for (const Vec& c : part) extended.push_back(closest_triangle(*queries, c));
+      extended.push_back(closest_triangle(*queries, centroid(part[0], part[1], part[2])));
+      std::sort(extended.begin(), extended.end());
+      extended.erase(std::unique(extended.begin(), extended.end()), extended.end());
+      candidates = extended;
+    }
+    const double prism2 = prism_bound2(part, candidates, enough2);
+    if (prism2 <= enough2) return prism2;
+    const double single2 = std::min(prism2, single_bound2(part, candidates));
+    if (depth >= kMaxRefineDepth || single2 <= enough2) return single2;
+    const double lower2 = std::max({nearest2(part[0], candidates), nearest2(part[1], candidates), nearest2(part[2], candidates)});
+    if (single2 <= lower2 * kCloseEnough2) return single2;
+    const Triangle mid{midpoint(part[0], part[1]), midpoint(part[1], part[2]), midpoint(part[2], part[0])};
+    const std::array<Triangle, 4> parts{
+        {{part[0], mid[0], mid[2]}, {mid[0], part[1], mid[1]}, {mid[2], mid[1], part[2]}, {mid[0], mid[1], mid[2]}}};
+    double result2 = 0.0;
+    for (const Triangle& piece : parts)
+      result2 = std::max(result2, bound2(piece, candidates, std::max(enough2, result2), queries, depth + 1));
+    return std::min(result2, single2);
   }
 
  private:
-  const NodeMesh& output_;
-  std::size_t stride_;
-  measure::TriangleBvh bvh_;
+  std::span<const Triangle> output_;
+  struct Sphere {
+    Vec center;
+    double radius;
+  };
+  std::vector<Vec> normal_;      // per output triangle: twice its area times its unit normal
+  std::vector<Sphere> sphere_;   // per output triangle: around its centroid, through its farthest corner
 };
 
-// Raises `total` to a bound over the input triangles `triangles` by closest-point queries.
-double bvh_bound(const NodeMesh& input, const NodeMesh& output, const std::vector<std::uint32_t>& triangles,
-                 double total) {
-  const Bounder bounder(output);
+struct Pending {
+  double bound2;
+  std::uint32_t triangle;
+};
+
+// Sorts `pending` worst first and raises `total2` with the closer bound of each while its cheap
+// bound exceeds the total.
+template <class Closer>
+double settle_pending(std::vector<Pending>& pending, double total2, Closer&& closer) {
+  std::sort(pending.begin(), pending.end(), [](const Pending& a, const Pending& b) {
+    return a.bound2 != b.bound2 ? a.bound2 > b.bound2 : a.triangle < b.triangle;
+  });
+  for (const Pending& p : pending) {
+    if (p.bound2 <= total2) break;
+    total2 = std::max(total2, closer(p.triangle, total2));
+  }
+  return total2;
+}
+
+// Raises `total2` to a bound over the input triangles `triangles` by closest-point queries.
+double bvh_bound2(const NodeMesh& input, std::span<const Triangle> output, const NodeMesh& output_mesh,
+                  const std::vector<std::uint32_t>& triangles, double total2) {
+  const measure::TriangleBvh bvh(output_mesh.vertices, output_mesh.layout.floats(), output_mesh.indices);
+  const PartBounder bounder(output);
   const std::size_t stride = input.layout.floats();
   auto input_position = [&](std::uint32_t v) {
     const float* f = &input.vertices[v * stride];
     return Vec{f[0], f[1], f[2]};
   };
+  auto corners_of = [&](std::uint32_t t) {
+    const std::uint32_t* v = &input.indices[3 * std::size_t{t}];
+    return Triangle{input_position(v[0]), input_position(v[1]), input_position(v[2])};
+  };
 
   // nearest output triangle of every corner; their max is a lower bound
-  constexpr std::uint32_t kUnset = std::numeric_limits<std::uint32_t>::max();
-  std::vector<std::uint32_t> nearest_triangle(input.vertex_count(), kUnset);
-  std::vector<double> nearest_distance(input.vertex_count(), 0.0);
+  std::vector<std::uint32_t> nearest_triangle(input.vertex_count(), kNone);
   for (std::uint32_t t : triangles) {
     for (std::size_t k = 0; k < 3; ++k) {
       const std::uint32_t v = input.indices[3 * std::size_t{t} + k];
-      if (nearest_triangle[v] != kUnset) continue;
-      std::tie(nearest_triangle[v], nearest_distance[v]) = bounder.nearest(input_position(v));
-      total = std::max(total, nearest_distance[v]);
+      if (nearest_triangle[v] != kNone) continue;
+      const Vec p = input_position(v);
+      nearest_triangle[v] = closest_triangle(bvh, p);
+      total2 = std::max(total2, bounder.distance2(p, nearest_triangle[v]));
     }
   }
-
-  // per triangle: bound from its corners' nearest triangles
-  struct Pending {
-    double bound;
-    std::uint32_t triangle;
+  auto candidates_of = [&](std::uint32_t t) {
+    const std::uint32_t* v = &input.indices[3 * std::size_t{t}];
+    return std::array<std::uint32_t, 3>{nearest_triangle[v[0]], nearest_triangle[v[1]], nearest_triangle[v[2]]};
   };
   std::vector<Pending> pending;
   for (std::uint32_t t : triangles) {
-    const std::uint32_t* corner = &input.indices[3 * std::size_t{t}];
-    const std::array<Vec, 3> corners{input_position(corner[0]), input_position(corner[1]), input_position(corner[2])};
-    const std::vector<std::uint32_t> candidates{nearest_triangle[corner[0]], nearest_triangle[corner[1]],
-                                                nearest_triangle[corner[2]]};
-    const double bound = bounder.corner_bound(corners, candidates);
-    if (bound > total) pending.push_back({bound, t});
+    const double bound2 = bounder.single_bound2(corners_of(t), candidates_of(t));
+    if (bound2 > total2) pending.push_back({bound2, t});
   }
-
-  // refine the worst first while they can raise the total
-  std::sort(pending.begin(), pending.end(), [](const Pending& a, const Pending& b) {
-    return a.bound != b.bound ? a.bound > b.bound : a.triangle < b.triangle;
+  return settle_pending(pending, total2, [&](std::uint32_t t, double enough2) {
+    return bounder.bound2(corners_of(t), candidates_of(t), enough2, &bvh);
   });
-  for (const Pending& p : pending) {
-    if (p.bound <= total) break;
-    const std::uint32_t* corner = &input.indices[3 * std::size_t{p.triangle}];
-    const std::array<Vec, 3> corners{input_position(corner[0]), input_position(corner[1]), input_position(corner[2])};
-    std::vector<std::uint32_t> candidates{nearest_triangle[corner[0]], nearest_triangle[corner[1]],
-                                          nearest_triangle[corner[2]]};
-    const std::array<double, 3> distances{nearest_distance[corner[0]], nearest_distance[corner[1]],
-                                          nearest_distance[corner[2]]};
-    total = std::max(total, bounder.refine(corners, distances, std::move(candidates), total, 0));
-  }
-  return total;
 }
+
+double finish(double total2) { return std::sqrt(total2) * (1.0 + 1e-6); }
 
 }  // namespace
 
 double hausdorff_upper_bound(const NodeMesh& input, const NodeMesh& output, const ImageHints& hints) {
   if (input.triangle_count() == 0) return 0.0;
-  if (output.triangle_count() == 0) return std::numeric_limits<double>::infinity();
+  if (output.triangle_count() == 0) return kInfinity;
   const std::size_t in_stride = input.layout.floats();
-  const std::size_t out_stride = output.layout.floats();
   const bool have_fans = !hints.vertex_cluster.empty() && !hints.fan_offset.empty();
+  const bool have_images = !hints.nearby_output_triangle.empty();
   auto input_position = [&](std::uint32_t v) {
     const float* f = &input.vertices[v * in_stride];
     return Vec{f[0], f[1], f[2]};
   };
-  // the output's triangles as double corners, converted once: every one is a candidate of many
-  // input vertices and triangles
-  std::vector<std::array<Vec, 3>> output_corners(output.triangle_count());
-  for (std::size_t triangle = 0; triangle < output_corners.size(); ++triangle) {
-    for (std::size_t k = 0; k < 3; ++k) {
-      const float* f = &output.vertices[output.indices[3 * triangle + k] * out_stride];
-      output_corners[triangle][k] = {f[0], f[1], f[2]};
-    }
-  }
-  auto output_triangle = [&](std::uint32_t triangle) -> const std::array<Vec, 3>& { return output_corners[triangle]; };
+  auto corners_of = [&](std::size_t t) {
+    const std::uint32_t* v = &input.indices[3 * t];
+    return Triangle{input_position(v[0]), input_position(v[1]), input_position(v[2])};
+  };
+  auto image_of = [&](std::size_t t) {
+    const std::uint32_t image = have_images ? hints.nearby_output_triangle[t] : kNone;
+    return image < output.triangle_count() ? image : kNone;
+  };
   auto fan = [&](std::uint32_t v) {
     const std::uint32_t c = hints.vertex_cluster[v];
     return hints.fan_triangle.subspan(hints.fan_offset[c], hints.fan_offset[c + 1] - hints.fan_offset[c]);
   };
+  // the output's triangles as double corners, converted once: every one is a candidate of many
+  // input vertices and triangles
+  const std::vector<Triangle> output_corners = triangle_corners(output);
+  const PartBounder bounder(output_corners);
 
-  // Squared distances below: a first total, every input vertex's distance to the nearest
-  // triangle of its cluster's fan (each is the bound of a degenerate triangle, so the final total
-  // is at least their max, and a high total early lets most triangles below skip their exact
-  // distances). A vertex stops at the first fan triangle within the total: it cannot raise it.
-  // |x - corner| bounds dist(x, T) from above, so a corner within the total settles it too.
-  auto near_corner = [](const Vec& x, const std::array<Vec, 3>& tri, double limit2) {
-    for (const Vec& corner : tri) {
-      const Vec d = sub(x, corner);
-      if (dot(d, d) <= limit2) return true;
-    }
-    return false;
+  // Squared distances below. Every input vertex's nearest output triangle among the images of
+  // the input triangles around it: a candidate of the triangles at the vertex.
+  std::vector<std::uint32_t> vertex_best(input.vertex_count(), kNone);
+  std::vector<double> vertex_best2(input.vertex_count(), kInfinity);
+  auto offer = [&](std::uint32_t v, std::uint32_t triangle) {
+    const double d2 = bounder.distance2(input_position(v), triangle);
+    if (d2 < vertex_best2[v]) vertex_best2[v] = d2, vertex_best[v] = triangle;
   };
-  double total2 = 0.0;
-  if (have_fans) {
-    for (std::uint32_t v = 0; v < input.vertex_count(); ++v) {
-      double best2 = std::numeric_limits<double>::infinity();
-      const Vec p = input_position(v);
-      for (std::uint32_t triangle : fan(v)) {
-        const std::array<Vec, 3>& t = output_triangle(triangle);
-        if (near_corner(p, t, total2)) {
-          best2 = total2;
-          break;
-        }
-        best2 = std::min(best2, point_triangle_distance2(p, t[0], t[1], t[2]));
-        if (best2 <= total2) break;
-      }
-      if (best2 < std::numeric_limits<double>::infinity()) total2 = std::max(total2, best2);
-    }
-  }
+  for (std::size_t t = 0; t < input.triangle_count(); ++t)
+    if (const std::uint32_t image = image_of(t); image != kNone)
+      for (std::size_t k = 0; k < 3; ++k) offer(input.indices[3 * t + k], image);
 
+  // A first total, the exact distance of the vertices whose hinted one is the largest, until
+  // the next hinted one is within it: at most the true Hausdorff distance, so the total loses
+  // nothing, and high enough that most triangles below skip their closer look. (The hints miss
+  // a vertex's nearest triangle now and then, by up to ten times its distance: one such vertex
+  // would set the whole total.) The hierarchy is built at the first query.
+  std::optional<measure::TriangleBvh> bvh;
+  std::vector<std::pair<double, std::uint32_t>> worst;
+  worst.reserve(input.vertex_count());
+  for (std::uint32_t v = 0; v < input.vertex_count(); ++v)
+    if (vertex_best2[v] < kInfinity) worst.emplace_back(vertex_best2[v], v);
+  std::make_heap(worst.begin(), worst.end());
+  double total2 = 0.0;
+  while (!worst.empty() && worst.front().first > total2) {
+    const std::uint32_t v = worst.front().second;
+    std::pop_heap(worst.begin(), worst.end());
+    worst.pop_back();
+    if (!bvh) bvh.emplace(output.vertices, output.layout.floats(), output.indices);
+    const Vec p = input_position(v);
+    vertex_best[v] = closest_triangle(*bvh, p);
+    vertex_best2[v] = bounder.distance2(p, vertex_best[v]);
+    total2 = std::max(total2, vertex_best2[v]);
+  }
+  worst = {};
+
+  // The bound of input triangle `part` where it may raise the total: its prism pieces over
+  // `candidates`; where these leave a gap (rare), or exceed twice its corners' distances (loose
+  // where the output stands steep under the part: the pieces lie straight over their triangles
+  // but far from them), the split bound with closest-point queries as well. Both are bounds:
+  // the smaller.
+  auto closer_look = [&](const Triangle& part, std::span<const std::uint32_t> candidates, double enough2) {
+    const double prism2 = bounder.prism_bound2(part, candidates, enough2);
+    if (prism2 <= enough2) return prism2;
+    const double lower2 = std::max({bounder.nearest2(part[0], candidates), bounder.nearest2(part[1], candidates),
+                                    bounder.nearest2(part[2], candidates)});
+    if (prism2 <= kPrismTrusted2 * lower2) return prism2;
+    if (!bvh) bvh.emplace(output.vertices, output.layout.floats(), output.indices);
+    return std::min(prism2, bounder.bound2(part, candidates, enough2, &*bvh));
+  };
+
+  // Every triangle's cheap bound: the best of its image and its corners' nearest triangles as
+  // the single candidate. A corner within total2 of one of the candidate's corners is not
+  // measured (it cannot raise the total); a candidate within the total settles the triangle.
+  std::vector<Pending> pending;
   std::vector<std::uint32_t> unresolved;
-  // the input triangle that last evaluated each output triangle: the image and the fans of a
-  // triangle's corners overlap (corners in one cluster share its fan, a surviving image is in
-  // every corner's fan), and a candidate evaluated twice cannot lower the minimum
-  std::vector<std::uint32_t> evaluated_for(output.triangle_count(), kNoHint);
   for (std::size_t t = 0; t < input.triangle_count(); ++t) {
     const std::uint32_t* corner = &input.indices[3 * t];
-    const std::array<Vec, 3> p{input_position(corner[0]), input_position(corner[1]), input_position(corner[2])};
-    // max over the corners of the squared distance to output triangle `candidate` where it
-    // exceeds total2 (at most total2 otherwise: a corner within total2 of one of the candidate's
-    // corners is not measured, it cannot raise the total); stops early once it reaches `enough2`
-    // (then returns a value >= enough2, only good for taking a minimum)
-    auto corner_bound2 = [&](std::uint32_t candidate, double enough2) {
-      const std::array<Vec, 3>& tri = output_triangle(candidate);
+    const Triangle p = corners_of(t);
+    double best2 = kInfinity;
+    std::array<std::uint32_t, 4> own{image_of(t), vertex_best[corner[0]], vertex_best[corner[1]], vertex_best[corner[2]]};
+    for (std::uint32_t candidate : own) {
+      if (candidate == kNone) continue;
+      const Triangle& tri = output_corners[candidate];
       double worst2 = 0.0;
       for (const Vec& x : p) {
         if (near_corner(x, tri, std::max(worst2, total2))) continue;
-        worst2 = std::max(worst2, point_triangle_distance2(x, tri[0], tri[1], tri[2]));
-        if (worst2 >= enough2) break;
+        worst2 = std::max(worst2, bounder.distance2(x, candidate));
+        if (worst2 >= best2) break;
       }
-      return worst2;
-    };
-    const std::uint32_t hint = hints.nearby_output_triangle.empty() ? kNoHint : hints.nearby_output_triangle[t];
-    double best2 = std::numeric_limits<double>::infinity();
-    if (hint != kNoHint && hint < output.triangle_count()) {
-      best2 = corner_bound2(hint, std::numeric_limits<double>::infinity());
-      if (best2 <= total2) continue;
-      evaluated_for[hint] = static_cast<std::uint32_t>(t);
+      best2 = std::min(best2, worst2);
+      if (best2 <= total2) break;
     }
-    if (have_fans) {
-      for (std::uint32_t v : {corner[0], corner[1], corner[2]}) {
-        for (std::uint32_t candidate : fan(v)) {
-          if (evaluated_for[candidate] == t) continue;
-          evaluated_for[candidate] = static_cast<std::uint32_t>(t);
-          best2 = std::min(best2, corner_bound2(candidate, best2));
-          if (best2 <= total2) break;
-        }
-        if (best2 <= total2) break;
-      }
+    if (best2 == kInfinity) {
+      unresolved.push_back(static_cast<std::uint32_t>(t));
+      continue;
     }
-    if (best2 == std::numeric_limits<double>::infinity()) unresolved.push_back(static_cast<std::uint32_t>(t));
-    else total2 = std::max(total2, best2);
+    if (best2 <= total2) continue;
+    // the prism pieces of these few candidates: they cover most triangles that straddle an
+    // output edge (the two triangles are the corners' nearest)
+    std::sort(own.begin(), own.end());
+    const auto distinct = static_cast<std::size_t>(std::unique(own.begin(), own.end()) - own.begin());
+    const std::span<const std::uint32_t> few(own.data(), own[distinct - 1] == kNone ? distinct - 1 : distinct);
+    const double prism2 = bounder.prism_bound2(p, few, total2);
+    if (prism2 == kInfinity) pending.push_back({best2, static_cast<std::uint32_t>(t)});
+    else if (std::min(prism2, best2) > total2) total2 = std::max(total2, std::min(best2, closer_look(p, few, total2)));
   }
-  double total = std::sqrt(total2);
-  if (!unresolved.empty()) total = bvh_bound(input, output, unresolved, total);
-  return total * (1.0 + 1e-6);
+
+  // The closer look, worst first: the candidates and the fans around the corners' clusters.
+  std::vector<std::uint32_t> candidates;
+  std::vector<std::uint32_t> added_for(output.triangle_count(), kNone);
+  total2 = settle_pending(pending, total2, [&](std::uint32_t t, double enough2) {
+    candidates.clear();
+    auto add = [&](std::uint32_t candidate) {
+      if (candidate == kNone || added_for[candidate] == t) return;
+      added_for[candidate] = t;
+      candidates.push_back(candidate);
+    };
+    const std::uint32_t* corner = &input.indices[3 * std::size_t{t}];
+    add(image_of(t));
+    for (std::size_t k = 0; k < 3; ++k) add(vertex_best[corner[k]]);
+    if (have_fans)
+      for (std::size_t k = 0; k < 3; ++k)
+        for (std::uint32_t candidate : fan(corner[k])) add(candidate);
+    return closer_look(corners_of(t), candidates, enough2);
+  });
+  if (!unresolved.empty()) total2 = bvh_bound2(input, output_corners, output, unresolved, total2);
+  return finish(total2);
 }
 
 double hausdorff_upper_bound(const NodeMesh& input, const NodeMesh& output) {
-  return hausdorff_upper_bound(input, output, ImageHints{});
+  if (input.triangle_count() == 0) return 0.0;
+  if (output.triangle_count() == 0) return kInfinity;
+  std::vector<std::uint32_t> all(input.triangle_count());
+  for (std::size_t t = 0; t < all.size(); ++t) all[t] = static_cast<std::uint32_t>(t);
+  return finish(bvh_bound2(input, triangle_corners(output), output, all, 0.0));
 }
 
 }  // namespace octolod::bake

@@ -12,8 +12,9 @@ namespace octolod::bake {
 // An upper bound, in model units, of the one-sided Hausdorff distance from `input` to `output`:
 // max over points x of the input's triangles of dist(x, output's triangles). 0 when the input has
 // no triangles, +infinity when only the output has none. Never below the true value (up to a
-// relative 1e-6 margin added for rounding); usually within a few percent of it.
-// Closest-point queries (measure::TriangleBvh) for every input vertex, refinement where needed.
+// relative 1e-6 margin added for rounding); usually within a few percent of it (error_bound.cpp:
+// input triangles cut into pieces that each lie over one output triangle, or split).
+// Closest-point queries (measure::TriangleBvh) for every input vertex.
 double hausdorff_upper_bound(const NodeMesh& input, const NodeMesh& output);
 
 // Where a vertex clustering sent the input (all spans index the input / output meshes given
@@ -28,13 +29,10 @@ struct ImageHints {
   std::span<const std::uint32_t> fan_triangle;
 };
 
-// The same bound, much faster with hints: for a fixed output triangle T, x -> dist(x, T) is
-// convex, so max over t's corners of dist(corner, T) bounds dist(x, output) on all of input
-// triangle t, for ANY T. Candidates T come from the hints instead of closest-point queries: the
-// triangle's image first; when that does not settle it, the fans around its corners' clusters
-// (where the nearest output triangles of its corners nearly always are); the BVH only for
-// triangles with no candidate. Exactly as conservative; about as tight as the query version
-// without refinement.
+// The same bound, faster with hints, and as tight: the candidate output triangles of an input
+// triangle come from the hints instead of closest-point queries (its image, the images nearest
+// to its corners, the fans around its corners' clusters), queries only for the few vertices
+// whose hinted distance is the largest and for triangles the candidates do not cover.
 double hausdorff_upper_bound(const NodeMesh& input, const NodeMesh& output, const ImageHints& hints);
 
 }  // namespace octolod::bake

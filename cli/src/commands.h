@@ -73,10 +73,10 @@ struct RenderArgs {
   double fov_degrees = 60.0;
   int width = 1024;
   int height = 768;
-  // Coarser than the runtime's 2 px default: a picture exists to show which LODs the cut is made
-  // of, and at 2 px the framed demo rock (samples/rock_small.ply, 40K triangles) is drawn
-  // entirely from its leaves' original triangles, one tint; at 4 px it mixes two detail levels.
-  double sse = 4.0;
+  // The runtime's default (walk's too): the framed demo rock (samples/rock_small.ply, 40K
+  // triangles) is drawn from two detail levels at 2 px (13.5K triangles), from the root's one
+  // LOD alone at 4 px.
+  double sse = 2.0;
   std::string budget = "512M";
   std::string output;
 };

@@ -1,0 +1,142 @@
+// The conservative step error (bake/src/error_bound.h): never below the true one-sided
+// Hausdorff distance, and close to it where an input triangle reaches across output edges,
+// with and without the clustering's hints. The bound along whole LOD chains is checked by
+// LodTest.EveryLodErrorBoundsTheMeasuredHausdorff (cluster_test.cpp).
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <vector>
+
+#include "error_bound.h"
+#include "octolod/measure/triangle_bvh.h"
+
+namespace octolod::bake {
+namespace {
+
+using Point = std::array<float, 3>;
+
+NodeMesh triangles(const std::vector<std::array<Point, 3>>& corners) {
+  NodeMesh mesh;
+  mesh.layout = {false, false, false};
+  for (const auto& triangle : corners)
+    for (const Point& p : triangle) {
+      mesh.indices.push_back(static_cast<std::uint32_t>(mesh.vertex_count()));
+      mesh.vertices.insert(mesh.vertices.end(), p.begin(), p.end());
+    }
+  return mesh;
+}
+
+// The unit square at height z as two triangles split along its diagonal (0,0) - (1,1).
+std::vector<std::array<Point, 3>> square(float z) {
+  return {{{{0, 0, z}, {1, 0, z}, {1, 1, z}}}, {{{0, 0, z}, {1, 1, z}, {0, 1, z}}}};
+}
+
+// max over points of `input` (a dense barycentric grid on each triangle) of the distance to
+// `output`: the true one-sided Hausdorff distance from below.
+double sampled_hausdorff(const NodeMesh& input, const NodeMesh& output) {
+  const measure::TriangleBvh bvh(output.vertices, output.layout.floats(), output.indices);
+  constexpr int kSteps = 60;
+  double worst = 0.0;
+  for (std::size_t t = 0; t < input.triangle_count(); ++t) {
+    const float* c[3];
+    for (std::size_t k = 0; k < 3; ++k) c[k] = &input.vertices[input.indices[3 * t + k] * input.layout.floats()];
+    for (int i = 0; i <= kSteps; ++i)
+      for (int j = 0; i + j <= kSteps; ++j) {
+        const float u = static_cast<float>(i) / kSteps, v = static_cast<float>(j) / kSteps, w = 1.0f - u - v;
+        const glm::vec3 p(u * c[0][0] + v * c[1][0] + w * c[2][0], u * c[0][1] + v * c[1][1] + w * c[2][1],
+                          u * c[0][2] + v * c[1][2] + w * c[2][2]);
+        worst = std::max(worst, static_cast<double>(bvh.closest(p).distance));
+      }
+  }
+  return worst;
+}
+
+// One input triangle 0.01 above the square, reaching across its diagonal: a corner of one
+// output triangle is 0.5 from the other, so one output triangle for the whole input triangle
+// bounds it by about 0.5; the pieces over each output triangle bound it by 0.01.
+const std::vector<std::array<Point, 3>> kStraddling{{{{0.1f, 0.1f, 0.01f}, {0.9f, 0.2f, 0.01f}, {0.2f, 0.9f, 0.01f}}}};
+
+TEST(ErrorBound, AStraddlingTriangleIsBoundedByItsDistanceNotItsReach) {
+  const NodeMesh input = triangles(kStraddling);
+  const NodeMesh output = triangles(square(0.0f));
+  const double bound = hausdorff_upper_bound(input, output);
+  EXPECT_GE(bound, 0.01 * (1.0 - 1e-6));
+  EXPECT_LE(bound, 0.0101);
+}
+
+TEST(ErrorBound, HintsGiveTheSameBoundAsQueries) {
+  // The hints name only the lower-right output triangle as the input triangle's image; the
+  // corners' nearest triangles (the upper-left one for the corner above it) complete the pieces.
+  const NodeMesh input = triangles(kStraddling);
+  const NodeMesh output = triangles(square(0.0f));
+  const std::vector<std::uint32_t> image{0};
+  const std::vector<std::uint32_t> vertex_cluster{0, 0, 0};
+  const std::vector<std::uint32_t> fan_offset{0, 1};
+  const std::vector<std::uint32_t> fan_triangle{0};
+  const ImageHints hints{image, vertex_cluster, fan_offset, fan_triangle};
+  const double hinted = hausdorff_upper_bound(input, output, hints);
+  EXPECT_GE(hinted, 0.01 * (1.0 - 1e-6));
+  EXPECT_LE(hinted, 0.0101);
+  EXPECT_NEAR(hinted, hausdorff_upper_bound(input, output), 1e-9);
+}
+
+TEST(ErrorBound, AFoldInTheOutputDoesNotHideTheDistance) {
+  // Over the lower-right half the output has a second sheet 0.3 higher, facing the same way:
+  // the prism pieces overlap there (their areas add up to more than the input's), so the bound
+  // does not use them; it stays at the true 0.01 and above it.
+  auto folded = square(0.0f);
+  folded.push_back({{{0, 0, 0.3f}, {1, 0, 0.3f}, {1, 1, 0.3f}}});
+  const NodeMesh input = triangles(kStraddling);
+  const NodeMesh output = triangles(folded);
+  const double bound = hausdorff_upper_bound(input, output);
+  EXPECT_GE(bound, 0.01 * (1.0 - 1e-6));
+  EXPECT_LE(bound, 0.011);
+}
+
+TEST(ErrorBound, AGapInTheOutputIsMeasuredAcrossIt) {
+  // Only the lower-right output triangle: the input's corner above the diagonal is about 0.5
+  // from it. The bound covers the gap (no piece there) and stays close to the true distance.
+  const NodeMesh input = triangles(kStraddling);
+  const NodeMesh output = triangles({square(0.0f)[0]});
+  const double bound = hausdorff_upper_bound(input, output);
+  const double measured = sampled_hausdorff(input, output);
+  EXPECT_GE(bound, measured);
+  EXPECT_LE(bound, measured * 1.05);
+}
+
+TEST(ErrorBound, NeverBelowTheSampledDistanceOnABumpyGrid) {
+  // A bumpy 12 x 12 height field against a coarse 3 x 3 one, both ways up: every input triangle
+  // reaches across several output edges, some output triangles stand steep under them.
+  auto height = [](float x, float y, float amplitude) {
+    return amplitude * std::sin(7.0f * x) * std::cos(5.0f * y + 1.0f);
+  };
+  auto grid = [&](int n, float amplitude) {
+    std::vector<std::array<Point, 3>> corners;
+    auto point = [&](int i, int j) {
+      const float x = static_cast<float>(i) / static_cast<float>(n), y = static_cast<float>(j) / static_cast<float>(n);
+      return Point{x, y, height(x, y, amplitude)};
+    };
+    for (int j = 0; j < n; ++j)
+      for (int i = 0; i < n; ++i) {
+        corners.push_back({point(i, j), point(i + 1, j), point(i + 1, j + 1)});
+        corners.push_back({point(i, j), point(i + 1, j + 1), point(i, j + 1)});
+      }
+    return corners;
+  };
+  for (const float amplitude : {0.05f, 0.3f}) {
+    const NodeMesh fine = triangles(grid(12, amplitude));
+    const NodeMesh coarse = triangles(grid(3, amplitude));
+    for (const auto& [input, output] : {std::pair{&fine, &coarse}, std::pair{&coarse, &fine}}) {
+      const double bound = hausdorff_upper_bound(*input, *output);
+      const double measured = sampled_hausdorff(*input, *output);
+      EXPECT_GE(bound, measured) << "amplitude " << amplitude;
+      EXPECT_LE(bound, measured * 1.5) << "amplitude " << amplitude;
+    }
+  }
+}
+
+}  // namespace
+}  // namespace octolod::bake
