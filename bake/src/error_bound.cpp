@@ -218,19 +218,22 @@ class PartBounder {
 
   // Bound of `part`: the prism pieces when they cover it, else the single candidate, split
   // while that can lower it and it exceeds `enough2`. With `queries`, the output triangles
-  // nearest to the corners and the centroid of the part (and so of every split part) join the
+  // nearest to the part's corners (the midpoints of the split parts) and centroid join the
   // candidates.
   double bound2(const Triangle& part, std::span<const std::uint32_t> candidates, double enough2,
                 const measure::TriangleBvh* queries, int depth = 0) const {
     std::vector<std::uint32_t> extended;
-    if (queries != nullptr) {
-      extended.assign(candidates.begin(), candidates.end());
-      for (const Vec& c : part) extended.push_back(closest_triangle(*queries, c));
-      extended.push_back(closest_triangle(*queries, centroid(part[0], part[1], part[2])));
+    auto extend = [&](std::span<const Vec> points) {
+      if (queries == nullptr) return;
+      if (extended.empty()) extended.assign(candidates.begin(), candidates.end());
+      for (const Vec& p : points) extended.push_back(closest_triangle(*queries, p));
       std::sort(extended.begin(), extended.end());
       extended.erase(std::unique(extended.begin(), extended.end()), extended.end());
       candidates = extended;
-    }
+    };
+    const Vec middle = centroid(part[0], part[1], part[2]);
+    if (depth == 0) extend(std::array<Vec, 4>{part[0], part[1], part[2], middle});
+    else extend(std::array<Vec, 1>{middle});
     const double prism2 = prism_bound2(part, candidates, enough2);
     if (prism2 <= enough2) return prism2;
     const double single2 = std::min(prism2, single_bound2(part, candidates));
@@ -238,6 +241,7 @@ class PartBounder {
     const double lower2 = std::max({nearest2(part[0], candidates), nearest2(part[1], candidates), nearest2(part[2], candidates)});
     if (single2 <= lower2 * kCloseEnough2) return single2;
     const Triangle mid{midpoint(part[0], part[1]), midpoint(part[1], part[2]), midpoint(part[2], part[0])};
+    extend(mid);
     const std::array<Triangle, 4> parts{
         {{part[0], mid[0], mid[2]}, {mid[0], part[1], mid[1]}, {mid[2], mid[1], part[2]}, {mid[0], mid[1], mid[2]}}};
     double result2 = 0.0;
