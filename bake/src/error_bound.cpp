@@ -27,25 +27,20 @@
 #include <vector>
 
 #include "octolod/measure/triangle_bvh.h"
+#include "part_bound.h"
 #include "point_triangle.h"
 
 namespace octolod::bake {
 namespace {
 
 using Vec = Vec3d;
-using Triangle = std::array<Vec, 3>;
+using Triangle = Triangle3d;
 
-constexpr int kMaxRefineDepth = 4;
-// A split part is not split further when its bound is within 5% of its corners' distances
-// (squared here): no split goes below those.
-constexpr double kCloseEnough2 = 1.05 * 1.05;
 // A prism bound within twice its part's corner distances is taken as it is (the corners'
 // distances are a lower bound of the true one); above, the output may stand steep under the
 // part (the pieces lie straight over their triangles but far from them), and the split bound
 // with closest-point queries is tried as well.
 constexpr double kPrismTrusted2 = 2.0 * 2.0;
-// The prism pieces cover a part when their areas add up to its area within this share.
-constexpr double kCoverTolerance = 1e-9;
 constexpr double kInfinity = std::numeric_limits<double>::infinity();
 constexpr std::uint32_t kNone = 0xFFFFFFFFu;
 
@@ -68,197 +63,6 @@ bool near_corner(const Vec& x, const Triangle& tri, double limit2) {
   }
   return false;
 }
-
-std::uint32_t closest_triangle(const measure::TriangleBvh& bvh, const Vec& p) {
-  return bvh.closest(glm::vec3(static_cast<float>(p[0]), static_cast<float>(p[1]), static_cast<float>(p[2]))).triangle;
-}
-
-// Points and convex polygons in a plane's coordinates (a part of an input triangle clipped by
-// a prism's sides).
-using Point2 = std::array<double, 2>;
-struct Polygon {
-  std::array<Point2, 9> corner;
-  std::size_t size = 0;
-};
-
-// Twice the signed area of (a, b, p): positive when p is left of a -> b.
-double left_of(const Point2& a, const Point2& b, const Point2& p) {
-  return (b[0] - a[0]) * (p[1] - a[1]) - (b[1] - a[1]) * (p[0] - a[0]);
-}
-
-// The part of `polygon` left of the line a -> b.
-Polygon clip(const Polygon& polygon, const Point2& a, const Point2& b) {
-  Polygon kept;
-  for (std::size_t k = 0; k < polygon.size; ++k) {
-    const Point2& p0 = polygon.corner[k];
-    const Point2& p1 = polygon.corner[(k + 1) % polygon.size];
-    const double h0 = left_of(a, b, p0), h1 = left_of(a, b, p1);
-    if (h0 >= 0.0) kept.corner[kept.size++] = p0;
-    if ((h0 > 0.0 && h1 < 0.0) || (h0 < 0.0 && h1 > 0.0)) {
-      const double t = h0 / (h0 - h1);
-      kept.corner[kept.size++] = {p0[0] + t * (p1[0] - p0[0]), p0[1] + t * (p1[1] - p0[1])};
-    }
-  }
-  return kept;
-}
-
-// Bounds of input triangles (and parts of them) against candidate output triangles, in squared
-// distances.
-class PartBounder {
- public:
-  explicit PartBounder(std::span<const Triangle> output) : output_(output) {
-    normal_.reserve(output.size());
-    sphere_.reserve(output.size());
-    for (const Triangle& t : output) {
-      normal_.push_back(cross(sub(t[1], t[0]), sub(t[2], t[0])));
-      const Vec center = centroid(t[0], t[1], t[2]);
-      double radius2 = 0.0;
-      for (const Vec& c : t) radius2 = std::max(radius2, dot(sub(c, center), sub(c, center)));
-      sphere_.push_back({center, std::sqrt(radius2) * (1.0 + 1e-9)});
-    }
-  }
-
-  double distance2(const Vec& p, std::uint32_t triangle) const {
-    const Triangle& t = output_[triangle];
-    return point_triangle_distance2(p, t[0], t[1], t[2]);
-  }
-
-  double nearest2(const Vec& p, std::span<const std::uint32_t> candidates) const {
-    double best2 = kInfinity;
-    for (std::uint32_t candidate : candidates) best2 = std::min(best2, distance2(p, candidate));
-    return best2;
-  }
-
-  // min over candidates of the max over the corners of the squared distance to it.
-  double single_bound2(const Triangle& part, std::span<const std::uint32_t> candidates) const {
-    double best2 = kInfinity;
-    for (std::uint32_t candidate : candidates) {
-      double worst2 = 0.0;
-      for (const Vec& c : part) {
-        worst2 = std::max(worst2, distance2(c, candidate));
-        if (worst2 >= best2) break;
-      }
-      best2 = std::min(best2, worst2);
-    }
-    return best2;
-  }
-
-  // max over the prism pieces of the distance at their corners to their candidate; +infinity
-  // when the pieces do not cover the part (a gap in the candidates, or an overlap, as over a
-  // fold of the output: either changes the sum of the pieces' areas). A piece's points lie
-  // straight above or below its triangle, so their distance along the part's normal bounds
-  // their distance to it, and is affine: corners whose such distance is within `enough2` are
-  // not measured exactly (they cannot raise the total).
-  double prism_bound2(const Triangle& part, std::span<const std::uint32_t> candidates, double enough2) const {
-    // the part's plane: origin part[0], orthonormal axes x (along its first edge) and y
-    const Vec edge0 = sub(part[1], part[0]), edge1 = sub(part[2], part[0]);
-    const Vec n = cross(edge0, edge1);
-    const double twice_area = std::sqrt(dot(n, n));
-    const double length0 = std::sqrt(dot(edge0, edge0));
-    if (!(twice_area > 0.0 && length0 > 0.0)) return kInfinity;
-    const Vec unit{n[0] / twice_area, n[1] / twice_area, n[2] / twice_area};
-    const Vec x_axis{edge0[0] / length0, edge0[1] / length0, edge0[2] / length0};
-    const Vec y_axis = cross(unit, x_axis);
-    const Polygon part2d{{{{0.0, 0.0}, {length0, 0.0}, {dot(edge1, x_axis), dot(edge1, y_axis)}}}, 3};
-    // the part's bounding sphere (around its centroid): a candidate whose sphere is farther from
-    // it across the normal than both radii cannot reach under it
-    const Vec middle = centroid(part[0], part[1], part[2]);
-    double part_radius2 = 0.0;
-    for (const Vec& c : part) {
-      const Vec d = sub(c, middle);
-      part_radius2 = std::max(part_radius2, dot(d, d));
-    }
-    const double part_radius = std::sqrt(part_radius2);
-    double covered = 0.0, worst2 = 0.0;
-    for (std::uint32_t candidate : candidates) {
-      const Sphere& sphere = sphere_[candidate];
-      const Vec apart = sub(sphere.center, middle);
-      const double across2 = dot(apart, apart) - dot(apart, unit) * dot(apart, unit);
-      const double reach = part_radius + sphere.radius;
-      if (across2 > reach * reach) continue;
-      const Triangle& tri = output_[candidate];
-      const Vec& normal = normal_[candidate];
-      const double facing = dot(normal, unit);
-      if (!(facing > 0.0)) continue;  // faces away, or stands on edge: its prism is flat
-      Point2 corner[3];
-      for (std::size_t j = 0; j < 3; ++j) {
-        const Vec r = sub(tri[j], part[0]);
-        corner[j] = {dot(r, x_axis), dot(r, y_axis)};
-      }
-      // the part against the prism's sides (the projected triangle winds counter-clockwise)
-      std::array<std::array<double, 3>, 3> side;
-      bool empty = false, inside = true;
-      for (std::size_t e = 0; e < 3 && !empty; ++e) {
-        for (std::size_t k = 0; k < 3; ++k) side[e][k] = left_of(corner[e], corner[(e + 1) % 3], part2d.corner[k]);
-        empty = side[e][0] < 0.0 && side[e][1] < 0.0 && side[e][2] < 0.0;
-        inside = inside && side[e][0] >= 0.0 && side[e][1] >= 0.0 && side[e][2] >= 0.0;
-      }
-      if (empty) continue;
-      Polygon piece = part2d;
-      for (std::size_t e = 0; e < 3 && !inside && piece.size > 0; ++e) piece = clip(piece, corner[e], corner[(e + 1) % 3]);
-      if (piece.size < 3) continue;
-      for (std::size_t k = 1; k + 1 < piece.size; ++k) covered += left_of(piece.corner[0], piece.corner[k], piece.corner[k + 1]);
-      // distance along the part's normal to the candidate's plane: affine in the plane's coordinates
-      const double along0 = dot(sub(part[0], tri[0]), normal) / facing;
-      const double along_x = dot(x_axis, normal) / facing, along_y = dot(y_axis, normal) / facing;
-      for (std::size_t k = 0; k < piece.size; ++k) {
-        const Point2& q = piece.corner[k];
-        const double along = along0 + q[0] * along_x + q[1] * along_y;
-        if (along * along <= enough2) {
-          worst2 = std::max(worst2, along * along);
-          continue;
-        }
-        const Vec x{part[0][0] + q[0] * x_axis[0] + q[1] * y_axis[0], part[0][1] + q[0] * x_axis[1] + q[1] * y_axis[1],
-                    part[0][2] + q[0] * x_axis[2] + q[1] * y_axis[2]};
-        worst2 = std::max(worst2, distance2(x, candidate));
-      }
-    }
-    return std::abs(covered - twice_area) <= kCoverTolerance * twice_area ? worst2 : kInfinity;
-  }
-
-  // Bound of `part`: the prism pieces when they cover it, else the single candidate, split
-  // while that can lower it and it exceeds `enough2`. With `queries`, the output triangles
-  // nearest to the part's corners (the midpoints of the split parts) and centroid join the
-  // candidates.
-  double bound2(const Triangle& part, std::span<const std::uint32_t> candidates, double enough2,
-                const measure::TriangleBvh* queries, int depth = 0) const {
-    std::vector<std::uint32_t> extended;
-    auto extend = [&](std::span<const Vec> points) {
-      if (queries == nullptr) return;
-      if (extended.empty()) extended.assign(candidates.begin(), candidates.end());
-      for (const Vec& p : points) extended.push_back(closest_triangle(*queries, p));
-      std::sort(extended.begin(), extended.end());
-      extended.erase(std::unique(extended.begin(), extended.end()), extended.end());
-      candidates = extended;
-    };
-    const Vec middle = centroid(part[0], part[1], part[2]);
-    if (depth == 0) extend(std::array<Vec, 4>{part[0], part[1], part[2], middle});
-    else extend(std::array<Vec, 1>{middle});
-    const double prism2 = prism_bound2(part, candidates, enough2);
-    if (prism2 <= enough2) return prism2;
-    const double single2 = std::min(prism2, single_bound2(part, candidates));
-    if (depth >= kMaxRefineDepth || single2 <= enough2) return single2;
-    const double lower2 = std::max({nearest2(part[0], candidates), nearest2(part[1], candidates), nearest2(part[2], candidates)});
-    if (single2 <= lower2 * kCloseEnough2) return single2;
-    const Triangle mid{midpoint(part[0], part[1]), midpoint(part[1], part[2]), midpoint(part[2], part[0])};
-    extend(mid);
-    const std::array<Triangle, 4> parts{
-        {{part[0], mid[0], mid[2]}, {mid[0], part[1], mid[1]}, {mid[2], mid[1], part[2]}, {mid[0], mid[1], mid[2]}}};
-    double result2 = 0.0;
-    for (const Triangle& piece : parts)
-      result2 = std::max(result2, bound2(piece, candidates, std::max(enough2, result2), queries, depth + 1));
-    return std::min(result2, single2);
-  }
-
- private:
-  std::span<const Triangle> output_;
-  struct Sphere {
-    Vec center;
-    double radius;
-  };
-  std::vector<Vec> normal_;      // per output triangle: twice its area times its unit normal
-  std::vector<Sphere> sphere_;   // per output triangle: around its centroid, through its farthest corner
-};
 
 struct Pending {
   double bound2;

@@ -1,0 +1,186 @@
+// part_bound.h: the single candidate, the prism pieces, the split refinement.
+#include "part_bound.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace octolod::bake {
+namespace {
+
+constexpr double kInfinity = std::numeric_limits<double>::infinity();
+// A split part is not split further when its bound is within 5% of its corners' distances
+// (squared here): no split goes below those.
+constexpr double kCloseEnough2 = 1.05 * 1.05;
+// The prism pieces cover a part when their areas add up to its area within this share.
+constexpr double kCoverTolerance = 1e-9;
+
+// Points and convex polygons in a plane's coordinates (a part clipped by a prism's sides).
+using Point2 = std::array<double, 2>;
+struct Polygon {
+  std::array<Point2, 9> corner;
+  std::size_t size = 0;
+};
+
+// Twice the signed area of (a, b, p): positive when p is left of a -> b.
+double left_of(const Point2& a, const Point2& b, const Point2& p) {
+  return (b[0] - a[0]) * (p[1] - a[1]) - (b[1] - a[1]) * (p[0] - a[0]);
+}
+
+// The part of `polygon` left of the line a -> b.
+Polygon clip(const Polygon& polygon, const Point2& a, const Point2& b) {
+  Polygon kept;
+  for (std::size_t k = 0; k < polygon.size; ++k) {
+    const Point2& p0 = polygon.corner[k];
+    const Point2& p1 = polygon.corner[(k + 1) % polygon.size];
+    const double h0 = left_of(a, b, p0), h1 = left_of(a, b, p1);
+    if (h0 >= 0.0) kept.corner[kept.size++] = p0;
+    if ((h0 > 0.0 && h1 < 0.0) || (h0 < 0.0 && h1 > 0.0)) {
+      const double t = h0 / (h0 - h1);
+      kept.corner[kept.size++] = {p0[0] + t * (p1[0] - p0[0]), p0[1] + t * (p1[1] - p0[1])};
+    }
+  }
+  return kept;
+}
+
+}  // namespace
+
+std::uint32_t closest_triangle(const measure::TriangleBvh& bvh, const Vec3d& p) {
+  return bvh.closest(glm::vec3(static_cast<float>(p[0]), static_cast<float>(p[1]), static_cast<float>(p[2]))).triangle;
+}
+
+PartBounder::PartBounder(std::span<const Triangle3d> output) : output_(output) {
+  normal_.reserve(output.size());
+  sphere_.reserve(output.size());
+  for (const Triangle3d& t : output) {
+    normal_.push_back(cross(sub(t[1], t[0]), sub(t[2], t[0])));
+    const Vec3d center = centroid(t[0], t[1], t[2]);
+    double radius2 = 0.0;
+    for (const Vec3d& c : t) radius2 = std::max(radius2, dot(sub(c, center), sub(c, center)));
+    sphere_.push_back({center, std::sqrt(radius2) * (1.0 + 1e-9)});
+  }
+}
+
+double PartBounder::distance2(const Vec3d& p, std::uint32_t triangle) const {
+  const Triangle3d& t = output_[triangle];
+  return point_triangle_distance2(p, t[0], t[1], t[2]);
+}
+
+double PartBounder::nearest2(const Vec3d& p, std::span<const std::uint32_t> candidates) const {
+  double best2 = kInfinity;
+  for (std::uint32_t candidate : candidates) best2 = std::min(best2, distance2(p, candidate));
+  return best2;
+}
+
+double PartBounder::single_bound2(const Triangle3d& part, std::span<const std::uint32_t> candidates) const {
+  double best2 = kInfinity;
+  for (std::uint32_t candidate : candidates) {
+    double worst2 = 0.0;
+    for (const Vec3d& c : part) {
+      worst2 = std::max(worst2, distance2(c, candidate));
+      if (worst2 >= best2) break;
+    }
+    best2 = std::min(best2, worst2);
+  }
+  return best2;
+}
+
+double PartBounder::prism_bound2(const Triangle3d& part, std::span<const std::uint32_t> candidates,
+                                 double enough2) const {
+  // the part's plane: origin part[0], orthonormal axes x (along its first edge) and y
+  const Vec3d edge0 = sub(part[1], part[0]), edge1 = sub(part[2], part[0]);
+  const Vec3d n = cross(edge0, edge1);
+  const double twice_area = std::sqrt(dot(n, n));
+  const double length0 = std::sqrt(dot(edge0, edge0));
+  if (!(twice_area > 0.0 && length0 > 0.0)) return kInfinity;
+  const Vec3d unit{n[0] / twice_area, n[1] / twice_area, n[2] / twice_area};
+  const Vec3d x_axis{edge0[0] / length0, edge0[1] / length0, edge0[2] / length0};
+  const Vec3d y_axis = cross(unit, x_axis);
+  const Polygon part2d{{{{0.0, 0.0}, {length0, 0.0}, {dot(edge1, x_axis), dot(edge1, y_axis)}}}, 3};
+  // the part's bounding sphere (around its centroid): a candidate whose sphere is farther from
+  // it across the normal than both radii cannot reach under it
+  const Vec3d middle = centroid(part[0], part[1], part[2]);
+  double part_radius2 = 0.0;
+  for (const Vec3d& c : part) {
+    const Vec3d d = sub(c, middle);
+    part_radius2 = std::max(part_radius2, dot(d, d));
+  }
+  const double part_radius = std::sqrt(part_radius2);
+  double covered = 0.0, worst2 = 0.0;
+  for (std::uint32_t candidate : candidates) {
+    const Sphere& sphere = sphere_[candidate];
+    const Vec3d apart = sub(sphere.center, middle);
+    const double across2 = dot(apart, apart) - dot(apart, unit) * dot(apart, unit);
+    const double reach = part_radius + sphere.radius;
+    if (across2 > reach * reach) continue;
+    const Triangle3d& tri = output_[candidate];
+    const Vec3d& normal = normal_[candidate];
+    const double facing = dot(normal, unit);
+    if (!(facing > 0.0)) continue;  // faces away, or stands on edge: its prism is flat
+    Point2 corner[3];
+    for (std::size_t j = 0; j < 3; ++j) {
+      const Vec3d r = sub(tri[j], part[0]);
+      corner[j] = {dot(r, x_axis), dot(r, y_axis)};
+    }
+    // the part against the prism's sides (the projected triangle winds counter-clockwise)
+    std::array<std::array<double, 3>, 3> side;
+    bool empty = false, inside = true;
+    for (std::size_t e = 0; e < 3 && !empty; ++e) {
+      for (std::size_t k = 0; k < 3; ++k) side[e][k] = left_of(corner[e], corner[(e + 1) % 3], part2d.corner[k]);
+      empty = side[e][0] < 0.0 && side[e][1] < 0.0 && side[e][2] < 0.0;
+      inside = inside && side[e][0] >= 0.0 && side[e][1] >= 0.0 && side[e][2] >= 0.0;
+    }
+    if (empty) continue;
+    Polygon piece = part2d;
+    for (std::size_t e = 0; e < 3 && !inside && piece.size > 0; ++e) piece = clip(piece, corner[e], corner[(e + 1) % 3]);
+    if (piece.size < 3) continue;
+    for (std::size_t k = 1; k + 1 < piece.size; ++k) covered += left_of(piece.corner[0], piece.corner[k], piece.corner[k + 1]);
+    // distance along the part's normal to the candidate's plane: affine in the plane's coordinates
+    const double along0 = dot(sub(part[0], tri[0]), normal) / facing;
+    const double along_x = dot(x_axis, normal) / facing, along_y = dot(y_axis, normal) / facing;
+    for (std::size_t k = 0; k < piece.size; ++k) {
+      const Point2& q = piece.corner[k];
+      const double along = along0 + q[0] * along_x + q[1] * along_y;
+      if (along * along <= enough2) {
+        worst2 = std::max(worst2, along * along);
+        continue;
+      }
+      const Vec3d x{part[0][0] + q[0] * x_axis[0] + q[1] * y_axis[0], part[0][1] + q[0] * x_axis[1] + q[1] * y_axis[1],
+                  part[0][2] + q[0] * x_axis[2] + q[1] * y_axis[2]};
+      worst2 = std::max(worst2, distance2(x, candidate));
+    }
+  }
+  return std::abs(covered - twice_area) <= kCoverTolerance * twice_area ? worst2 : kInfinity;
+}
+
+double PartBounder::bound2(const Triangle3d& part, std::span<const std::uint32_t> candidates, double enough2,
+                           const measure::TriangleBvh* queries, int depth) const {
+  std::vector<std::uint32_t> extended;
+  auto extend = [&](std::span<const Vec3d> points) {
+    if (queries == nullptr) return;
+    if (extended.empty()) extended.assign(candidates.begin(), candidates.end());
+    for (const Vec3d& p : points) extended.push_back(closest_triangle(*queries, p));
+    std::sort(extended.begin(), extended.end());
+    extended.erase(std::unique(extended.begin(), extended.end()), extended.end());
+    candidates = extended;
+  };
+  const Vec3d middle = centroid(part[0], part[1], part[2]);
+  if (depth == 0) extend(std::array<Vec3d, 4>{part[0], part[1], part[2], middle});
+  else extend(std::array<Vec3d, 1>{middle});
+  const double prism2 = prism_bound2(part, candidates, enough2);
+  if (prism2 <= enough2) return prism2;
+  const double single2 = std::min(prism2, single_bound2(part, candidates));
+  if (depth >= kMaxRefineDepth || single2 <= enough2) return single2;
+  const double lower2 = std::max({nearest2(part[0], candidates), nearest2(part[1], candidates), nearest2(part[2], candidates)});
+  if (single2 <= lower2 * kCloseEnough2) return single2;
+  const Triangle3d mid{midpoint(part[0], part[1]), midpoint(part[1], part[2]), midpoint(part[2], part[0])};
+  extend(mid);
+  const std::array<Triangle3d, 4> parts{
+      {{part[0], mid[0], mid[2]}, {mid[0], part[1], mid[1]}, {mid[2], mid[1], part[2]}, {mid[0], mid[1], mid[2]}}};
+  double result2 = 0.0;
+  for (const Triangle3d& piece : parts)
+    result2 = std::max(result2, bound2(piece, candidates, std::max(enough2, result2), queries, depth + 1));
+  return std::min(result2, single2);
+}
+
+}  // namespace octolod::bake

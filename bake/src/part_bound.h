@@ -1,0 +1,66 @@
+// Bounds of an input triangle, or of a part of one, against candidate output triangles: the
+// pieces of the conservative step error (error_bound.h). Every bound is an upper bound of the
+// largest distance from a point of the part to the output triangles, squared (model units²,
+// the frame of the triangles given), by the convexity of x -> dist(x, T) for one triangle T.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "octolod/measure/triangle_bvh.h"
+#include "point_triangle.h"
+
+namespace octolod::bake {
+
+using Triangle3d = std::array<Vec3d, 3>;
+
+// The index of the triangle of `bvh` nearest to p.
+std::uint32_t closest_triangle(const measure::TriangleBvh& bvh, const Vec3d& p);
+
+class PartBounder {
+ public:
+  // `output`: the output mesh's triangles (double corners), indexed as the candidates below;
+  // borrowed, must outlive the bounder. Keeps 56 bytes per triangle (normal, bounding sphere).
+  explicit PartBounder(std::span<const Triangle3d> output);
+
+  double distance2(const Vec3d& p, std::uint32_t triangle) const;
+  // min over `candidates` of distance2(p, .); +infinity when there is none.
+  double nearest2(const Vec3d& p, std::span<const std::uint32_t> candidates) const;
+
+  // One piece: min over the candidates of the max over the part's corners of the distance to it.
+  // Tight where the part lies over one output triangle; where it reaches across an output edge
+  // it is about how far it reaches.
+  double single_bound2(const Triangle3d& part, std::span<const std::uint32_t> candidates) const;
+
+  // The prism pieces: the prism over each candidate facing like the part, along the part's
+  // normal, cuts from it the convex piece that lies straight above or below that candidate, and
+  // each piece is bounded at its corners against its candidate. Only valid when the pieces cover
+  // the part, which their areas adding up to its area tells (a gap in the candidates' shadow or
+  // an overlap, as where the output folds, changes the sum): +infinity otherwise. Corners whose
+  // distance along the normal to their candidate's plane is within `enough2` are not measured
+  // exactly (that distance bounds theirs; below `enough2` it cannot raise a total).
+  double prism_bound2(const Triangle3d& part, std::span<const std::uint32_t> candidates, double enough2) const;
+
+  // The prism pieces when they cover the part within `enough2`; else the smaller of them and the
+  // single candidate, the part split in four (midpoints) while that can lower it below the
+  // corners' own distances and it exceeds `enough2`, down to depth kMaxRefineDepth. With
+  // `queries` (a hierarchy over the same output triangles), the triangles nearest to the part's
+  // corners and centroid, and to the split parts' midpoints, join the candidates.
+  double bound2(const Triangle3d& part, std::span<const std::uint32_t> candidates, double enough2,
+                const measure::TriangleBvh* queries, int depth = 0) const;
+
+  static constexpr int kMaxRefineDepth = 4;
+
+ private:
+  struct Sphere {
+    Vec3d center;
+    double radius;
+  };
+  std::span<const Triangle3d> output_;
+  std::vector<Vec3d> normal_;    // per output triangle: twice its area times its unit normal
+  std::vector<Sphere> sphere_;   // per output triangle: around its centroid, through its farthest corner
+};
+
+}  // namespace octolod::bake
