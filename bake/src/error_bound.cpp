@@ -123,7 +123,21 @@ double bvh_bound2(const NodeMesh& input, std::span<const Triangle> output, const
   });
 }
 
-double finish(double total2) { return std::sqrt(total2) * (1.0 + 1e-6); }
+// The bound from the squared total, with margins for rounding: relative 1e-6 for this file's
+// double arithmetic, and eight float epsilons of the largest coordinate of either mesh for those
+// who measure the same distances in float (measure::TriangleBvh, the runtime): the positions are
+// floats, and a bound this tight is otherwise a few float ulps below their measurements. An
+// output that holds every input point (total 0) stays at 0.
+double finish(double total2, const NodeMesh& input, const NodeMesh& output) {
+  if (total2 == 0.0) return 0.0;
+  double scale = 0.0;
+  for (const NodeMesh* mesh : {&input, &output}) {
+    const std::size_t stride = mesh->layout.floats();
+    for (std::size_t i = 0; i < mesh->vertices.size(); i += stride)
+      for (std::size_t k = 0; k < 3; ++k) scale = std::max(scale, static_cast<double>(std::abs(mesh->vertices[i + k])));
+  }
+  return std::sqrt(total2) * (1.0 + 1e-6) + 8.0 * std::numeric_limits<float>::epsilon() * scale;
+}
 
 }  // namespace
 
@@ -261,7 +275,7 @@ double hausdorff_upper_bound(const NodeMesh& input, const NodeMesh& output, cons
     return closer_look(corners_of(t), candidates, enough2);
   });
   if (!unresolved.empty()) total2 = bvh_bound2(input, output_corners, output, unresolved, total2);
-  return finish(total2);
+  return finish(total2, input, output);
 }
 
 double hausdorff_upper_bound(const NodeMesh& input, const NodeMesh& output) {
@@ -269,7 +283,7 @@ double hausdorff_upper_bound(const NodeMesh& input, const NodeMesh& output) {
   if (output.triangle_count() == 0) return kInfinity;
   std::vector<std::uint32_t> all(input.triangle_count());
   for (std::size_t t = 0; t < all.size(); ++t) all[t] = static_cast<std::uint32_t>(t);
-  return finish(bvh_bound2(input, triangle_corners(output), output, all, 0.0));
+  return finish(bvh_bound2(input, triangle_corners(output), output, all, 0.0), input, output);
 }
 
 }  // namespace octolod::bake

@@ -11,8 +11,9 @@ namespace octolod::bake {
 
 // An upper bound, in model units, of the one-sided Hausdorff distance from `input` to `output`:
 // max over points x of the input's triangles of dist(x, output's triangles). 0 when the input has
-// no triangles, +infinity when only the output has none. Never below the true value (up to a
-// relative 1e-6 margin added for rounding); usually within a few percent of it (error_bound.cpp:
+// no triangles, +infinity when only the output has none. Never below the true value, with margins
+// for rounding added (relative 1e-6, and 8 float epsilons of the largest coordinate, so that
+// distances measured in float do not exceed it either); usually within a few percent of it (error_bound.cpp:
 // input triangles cut into pieces that each lie over one output triangle, or split).
 // Closest-point queries (measure::TriangleBvh) for every input vertex.
 double hausdorff_upper_bound(const NodeMesh& input, const NodeMesh& output);
