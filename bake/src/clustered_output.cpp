@@ -25,6 +25,24 @@ void InputDistances::gather() {
   std::vector<std::uint32_t> fill(offset_.begin(), offset_.end() - 1);
   for (std::size_t t = 0; t < triangles; ++t)
     for_clusters_of(t, [&](std::uint32_t c) { triangle_[fill[c]++] = static_cast<std::uint32_t>(t); });
+
+  // bounding spheres: float centres, radii rounded up so that they hold the float corners
+  const std::size_t stride = input.layout.floats();
+  sphere_.resize(triangles);
+  for (std::size_t t = 0; t < triangles; ++t) {
+    const float* corner[3];
+    for (std::size_t k = 0; k < 3; ++k) corner[k] = &input.vertices[input.indices[3 * t + k] * stride];
+    Sphere& sphere = sphere_[t];
+    for (std::size_t i = 0; i < 3; ++i)
+      sphere.center[i] = static_cast<float>((double{corner[0][i]} + corner[1][i] + corner[2][i]) / 3.0);
+    double radius2 = 0.0;
+    for (const float* c : corner) {
+      double d2 = 0.0;
+      for (std::size_t i = 0; i < 3; ++i) d2 += (double{c[i]} - sphere.center[i]) * (double{c[i]} - sphere.center[i]);
+      radius2 = std::max(radius2, d2);
+    }
+    sphere.radius = std::nextafter(static_cast<float>(std::sqrt(radius2)), INFINITY);
+  }
 }
 
 void InputDistances::nearest2(std::span<const std::uint32_t> clusters, std::span<const Vec3d> points,
@@ -44,6 +62,15 @@ void InputDistances::nearest2(std::span<const std::uint32_t> clusters, std::span
       for (std::size_t r = 0; r < q; ++r)
         for (std::size_t k = 0; k < 3; ++k) seen = seen || out_.vertex_cluster[v[k]] == clusters[r];
       if (seen) continue;
+      // a triangle whose sphere is farther from every point than its best so far cannot lower it
+      const Sphere& sphere = sphere_[triangle_[i]];
+      bool reaches = false;
+      for (std::size_t p = 0; p < points.size() && !reaches; ++p) {
+        const Vec3d d = sub(points[p], {sphere.center[0], sphere.center[1], sphere.center[2]});
+        const double gap = std::sqrt(dot(d, d)) - sphere.radius;
+        reaches = gap <= 0.0 || gap * gap < distance2[p];
+      }
+      if (!reaches) continue;
       const Vec3d q0 = position(v[0]), q1 = position(v[1]), q2 = position(v[2]);
       for (std::size_t p = 0; p < points.size(); ++p)
         distance2[p] = std::min(distance2[p], point_triangle_distance2(points[p], q0, q1, q2));

@@ -3,6 +3,7 @@
 // the input triangles around a few clusters, with which they judge a change.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <optional>
 #include <span>
@@ -47,6 +48,11 @@ class InputDistances {
   bool gathered_ = false;
   std::vector<std::uint32_t> offset_;    // per cluster, into triangle_
   std::vector<std::uint32_t> triangle_;  // a triangle once per distinct cluster of its corners
+  struct Sphere {
+    std::array<float, 3> center;
+    float radius;
+  };
+  std::vector<Sphere> sphere_;  // per input triangle: holds its corners (skips far triangles)
 };
 
 }  // namespace octolod::bake
