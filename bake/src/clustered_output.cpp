@@ -26,34 +26,28 @@ void InputDistances::gather() {
   for (std::size_t t = 0; t < triangles; ++t)
     for_clusters_of(t, [&](std::uint32_t c) { triangle_[fill[c]++] = static_cast<std::uint32_t>(t); });
 
-  // bounding spheres: float centres, radii rounded up so that they hold the float corners
-  const std::size_t stride = input.layout.floats();
+  // bounding spheres in float: the centre rounded, the radius widened by the rounding's shift
+  // and rounded up, so that they still hold the corners
   sphere_.resize(triangles);
   for (std::size_t t = 0; t < triangles; ++t) {
-    const float* corner[3];
-    for (std::size_t k = 0; k < 3; ++k) corner[k] = &input.vertices[input.indices[3 * t + k] * stride];
-    Sphere& sphere = sphere_[t];
-    for (std::size_t i = 0; i < 3; ++i)
-      sphere.center[i] = static_cast<float>((double{corner[0][i]} + corner[1][i] + corner[2][i]) / 3.0);
-    double radius2 = 0.0;
-    for (const float* c : corner) {
-      double d2 = 0.0;
-      for (std::size_t i = 0; i < 3; ++i) d2 += (double{c[i]} - sphere.center[i]) * (double{c[i]} - sphere.center[i]);
-      radius2 = std::max(radius2, d2);
-    }
-    sphere.radius = std::nextafter(static_cast<float>(std::sqrt(radius2)), INFINITY);
+    const std::uint32_t* v = &input.indices[3 * t];
+    const Sphere exact = bounding_sphere(position(v[0]), position(v[1]), position(v[2]));
+    FloatSphere& sphere = sphere_[t];
+    for (std::size_t i = 0; i < 3; ++i) sphere.center[i] = static_cast<float>(exact.center[i]);
+    const Vec3d shift = sub(exact.center, {sphere.center[0], sphere.center[1], sphere.center[2]});
+    sphere.radius = std::nextafter(static_cast<float>(exact.radius + std::sqrt(dot(shift, shift))), INFINITY);
   }
+}
+
+Vec3d InputDistances::position(std::uint32_t v) const {
+  const float* f = &out_.input.vertices[v * out_.input.layout.floats()];
+  return {f[0], f[1], f[2]};
 }
 
 void InputDistances::nearest2(std::span<const std::uint32_t> clusters, std::span<const Vec3d> points,
                               std::span<double> distance2) {
   if (!gathered_) gather();
   const NodeMesh& input = out_.input;
-  const std::size_t stride = input.layout.floats();
-  auto position = [&](std::uint32_t v) {
-    const float* f = &input.vertices[v * stride];
-    return Vec3d{f[0], f[1], f[2]};
-  };
   std::fill(distance2.begin(), distance2.end(), INFINITY);
   for (std::size_t q = 0; q < clusters.size(); ++q)
     for (std::uint32_t i = offset_[clusters[q]]; i < offset_[clusters[q] + 1]; ++i) {
@@ -63,7 +57,7 @@ void InputDistances::nearest2(std::span<const std::uint32_t> clusters, std::span
         for (std::size_t k = 0; k < 3; ++k) seen = seen || out_.vertex_cluster[v[k]] == clusters[r];
       if (seen) continue;
       // a triangle whose sphere is farther from every point than its best so far cannot lower it
-      const Sphere& sphere = sphere_[triangle_[i]];
+      const FloatSphere& sphere = sphere_[triangle_[i]];
       bool reaches = false;
       for (std::size_t p = 0; p < points.size() && !reaches; ++p) {
         const Vec3d d = sub(points[p], {sphere.center[0], sphere.center[1], sphere.center[2]});

@@ -43,16 +43,17 @@ class InputDistances {
 
  private:
   void gather();
+  Vec3d position(std::uint32_t input_vertex) const;
 
   const ClusteredOutput& out_;
   bool gathered_ = false;
   std::vector<std::uint32_t> offset_;    // per cluster, into triangle_
   std::vector<std::uint32_t> triangle_;  // a triangle once per distinct cluster of its corners
-  struct Sphere {
+  struct FloatSphere {
     std::array<float, 3> center;
     float radius;
   };
-  std::vector<Sphere> sphere_;  // per input triangle: holds its corners (skips far triangles)
+  std::vector<FloatSphere> sphere_;  // per input triangle: holds its corners (skips far triangles)
 };
 
 }  // namespace octolod::bake

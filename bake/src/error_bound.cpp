@@ -44,24 +44,20 @@ constexpr double kPrismTrusted2 = 2.0 * 2.0;
 constexpr double kInfinity = std::numeric_limits<double>::infinity();
 constexpr std::uint32_t kNone = 0xFFFFFFFFu;
 
-std::vector<Triangle> triangle_corners(const NodeMesh& mesh) {
-  const std::size_t stride = mesh.layout.floats();
-  std::vector<Triangle> corners(mesh.triangle_count());
-  for (std::size_t t = 0; t < corners.size(); ++t)
-    for (std::size_t k = 0; k < 3; ++k) {
-      const float* f = &mesh.vertices[mesh.indices[3 * t + k] * stride];
-      corners[t][k] = {f[0], f[1], f[2]};
-    }
-  return corners;
+Vec position(const NodeMesh& mesh, std::uint32_t v) {
+  const float* f = &mesh.vertices[v * mesh.layout.floats()];
+  return {f[0], f[1], f[2]};
 }
 
-// |x - corner| bounds dist(x, T) from above: a corner of T within sqrt(limit2) of x settles x.
-bool near_corner(const Vec& x, const Triangle& tri, double limit2) {
-  for (const Vec& corner : tri) {
-    const Vec d = sub(x, corner);
-    if (dot(d, d) <= limit2) return true;
-  }
-  return false;
+Triangle corners(const NodeMesh& mesh, std::size_t t) {
+  const std::uint32_t* v = &mesh.indices[3 * t];
+  return {position(mesh, v[0]), position(mesh, v[1]), position(mesh, v[2])};
+}
+
+std::vector<Triangle> triangle_corners(const NodeMesh& mesh) {
+  std::vector<Triangle> all(mesh.triangle_count());
+  for (std::size_t t = 0; t < all.size(); ++t) all[t] = corners(mesh, t);
+  return all;
 }
 
 struct Pending {
@@ -83,20 +79,10 @@ double settle_pending(std::vector<Pending>& pending, double total2, Closer&& clo
   return total2;
 }
 
-// Raises `total2` to a bound over the input triangles `triangles` by closest-point queries.
-double bvh_bound2(const NodeMesh& input, std::span<const Triangle> output, const NodeMesh& output_mesh,
+// Raises `total2` to a bound over the input triangles `triangles` by closest-point queries
+// (`bvh` over the output triangles `bounder` bounds against).
+double bvh_bound2(const NodeMesh& input, const PartBounder& bounder, const measure::TriangleBvh& bvh,
                   const std::vector<std::uint32_t>& triangles, double total2) {
-  const measure::TriangleBvh bvh(output_mesh.vertices, output_mesh.layout.floats(), output_mesh.indices);
-  const PartBounder bounder(output);
-  const std::size_t stride = input.layout.floats();
-  auto input_position = [&](std::uint32_t v) {
-    const float* f = &input.vertices[v * stride];
-    return Vec{f[0], f[1], f[2]};
-  };
-  auto corners_of = [&](std::uint32_t t) {
-    const std::uint32_t* v = &input.indices[3 * std::size_t{t}];
-    return Triangle{input_position(v[0]), input_position(v[1]), input_position(v[2])};
-  };
 
   // nearest output triangle of every corner; their max is a lower bound
   std::vector<std::uint32_t> nearest_triangle(input.vertex_count(), kNone);
@@ -104,7 +90,7 @@ double bvh_bound2(const NodeMesh& input, std::span<const Triangle> output, const
     for (std::size_t k = 0; k < 3; ++k) {
       const std::uint32_t v = input.indices[3 * std::size_t{t} + k];
       if (nearest_triangle[v] != kNone) continue;
-      const Vec p = input_position(v);
+      const Vec p = position(input, v);
       nearest_triangle[v] = closest_triangle(bvh, p);
       total2 = std::max(total2, bounder.distance2(p, nearest_triangle[v]));
     }
@@ -115,11 +101,11 @@ double bvh_bound2(const NodeMesh& input, std::span<const Triangle> output, const
   };
   std::vector<Pending> pending;
   for (std::uint32_t t : triangles) {
-    const double bound2 = bounder.single_bound2(corners_of(t), candidates_of(t));
+    const double bound2 = bounder.single_bound2(corners(input, t), candidates_of(t));
     if (bound2 > total2) pending.push_back({bound2, t});
   }
   return settle_pending(pending, total2, [&](std::uint32_t t, double enough2) {
-    return bounder.bound2(corners_of(t), candidates_of(t), enough2, &bvh);
+    return bounder.bound2(corners(input, t), candidates_of(t), enough2, &bvh);
   });
 }
 
@@ -131,11 +117,9 @@ double bvh_bound2(const NodeMesh& input, std::span<const Triangle> output, const
 double finish(double total2, const NodeMesh& input, const NodeMesh& output) {
   if (total2 == 0.0) return 0.0;
   double scale = 0.0;
-  for (const NodeMesh* mesh : {&input, &output}) {
-    const std::size_t stride = mesh->layout.floats();
-    for (std::size_t i = 0; i < mesh->vertices.size(); i += stride)
-      for (std::size_t k = 0; k < 3; ++k) scale = std::max(scale, static_cast<double>(std::abs(mesh->vertices[i + k])));
-  }
+  for (const Bounds& bounds : {input.bounds(), output.bounds()})
+    for (std::size_t k = 0; k < 3; ++k)
+      scale = std::max({scale, static_cast<double>(std::abs(bounds.min[k])), static_cast<double>(std::abs(bounds.max[k]))});
   return std::sqrt(total2) * (1.0 + 1e-6) + 8.0 * std::numeric_limits<float>::epsilon() * scale;
 }
 
@@ -144,17 +128,8 @@ double finish(double total2, const NodeMesh& input, const NodeMesh& output) {
 double hausdorff_upper_bound(const NodeMesh& input, const NodeMesh& output, const ImageHints& hints) {
   if (input.triangle_count() == 0) return 0.0;
   if (output.triangle_count() == 0) return kInfinity;
-  const std::size_t in_stride = input.layout.floats();
   const bool have_fans = !hints.vertex_cluster.empty() && !hints.fan_offset.empty();
   const bool have_images = !hints.nearby_output_triangle.empty();
-  auto input_position = [&](std::uint32_t v) {
-    const float* f = &input.vertices[v * in_stride];
-    return Vec{f[0], f[1], f[2]};
-  };
-  auto corners_of = [&](std::size_t t) {
-    const std::uint32_t* v = &input.indices[3 * t];
-    return Triangle{input_position(v[0]), input_position(v[1]), input_position(v[2])};
-  };
   auto image_of = [&](std::size_t t) {
     const std::uint32_t image = have_images ? hints.nearby_output_triangle[t] : kNone;
     return image < output.triangle_count() ? image : kNone;
@@ -173,7 +148,7 @@ double hausdorff_upper_bound(const NodeMesh& input, const NodeMesh& output, cons
   std::vector<std::uint32_t> vertex_best(input.vertex_count(), kNone);
   std::vector<double> vertex_best2(input.vertex_count(), kInfinity);
   auto offer = [&](std::uint32_t v, std::uint32_t triangle) {
-    const double d2 = bounder.distance2(input_position(v), triangle);
+    const double d2 = bounder.distance2(position(input, v), triangle);
     if (d2 < vertex_best2[v]) vertex_best2[v] = d2, vertex_best[v] = triangle;
   };
   for (std::size_t t = 0; t < input.triangle_count(); ++t)
@@ -185,7 +160,11 @@ double hausdorff_upper_bound(const NodeMesh& input, const NodeMesh& output, cons
   // nothing, and high enough that most triangles below skip their closer look. (The hints miss
   // a vertex's nearest triangle now and then, by up to ten times its distance: one such vertex
   // would set the whole total.) The hierarchy is built at the first query.
-  std::optional<measure::TriangleBvh> bvh;
+  std::optional<measure::TriangleBvh> lazy_bvh;
+  auto bvh = [&]() -> const measure::TriangleBvh& {
+    if (!lazy_bvh) lazy_bvh.emplace(output.vertices, output.layout.floats(), output.indices);
+    return *lazy_bvh;
+  };
   std::vector<std::pair<double, std::uint32_t>> worst;
   worst.reserve(input.vertex_count());
   for (std::uint32_t v = 0; v < input.vertex_count(); ++v)
@@ -196,27 +175,25 @@ double hausdorff_upper_bound(const NodeMesh& input, const NodeMesh& output, cons
     const std::uint32_t v = worst.front().second;
     std::pop_heap(worst.begin(), worst.end());
     worst.pop_back();
-    if (!bvh) bvh.emplace(output.vertices, output.layout.floats(), output.indices);
-    const Vec p = input_position(v);
-    vertex_best[v] = closest_triangle(*bvh, p);
+    const Vec p = position(input, v);
+    vertex_best[v] = closest_triangle(bvh(), p);
     vertex_best2[v] = bounder.distance2(p, vertex_best[v]);
     total2 = std::max(total2, vertex_best2[v]);
   }
   worst = {};
 
-  // The bound of input triangle `part` where it may raise the total: its prism pieces over
-  // `candidates`; where these leave a gap (rare), or exceed twice its corners' distances (loose
-  // where the output stands steep under the part: the pieces lie straight over their triangles
-  // but far from them), the split bound with closest-point queries as well. Both are bounds:
-  // the smaller.
-  auto closer_look = [&](const Triangle& part, std::span<const std::uint32_t> candidates, double enough2) {
-    const double prism2 = bounder.prism_bound2(part, candidates, enough2);
+  // The bound of input triangle `part` where it may raise the total, given `prism2`, its prism
+  // pieces' bound over `candidates`: that bound, unless the pieces leave a gap (rare) or exceed
+  // twice its corners' distances (loose where the output stands steep under the part: the
+  // pieces lie straight over their triangles but far from them); then the split bound with
+  // closest-point queries as well. Both are bounds: the smaller.
+  auto closer_look = [&](const Triangle& part, std::span<const std::uint32_t> candidates, double prism2,
+                         double enough2) {
     if (prism2 <= enough2) return prism2;
     const double lower2 = std::max({bounder.nearest2(part[0], candidates), bounder.nearest2(part[1], candidates),
                                     bounder.nearest2(part[2], candidates)});
     if (prism2 <= kPrismTrusted2 * lower2) return prism2;
-    if (!bvh) bvh.emplace(output.vertices, output.layout.floats(), output.indices);
-    return std::min(prism2, bounder.bound2(part, candidates, enough2, &*bvh));
+    return std::min(prism2, bounder.bound2(part, candidates, enough2, &bvh()));
   };
 
   // Every triangle's cheap bound: the best of its image and its corners' nearest triangles as
@@ -226,21 +203,12 @@ double hausdorff_upper_bound(const NodeMesh& input, const NodeMesh& output, cons
   std::vector<std::uint32_t> unresolved;
   for (std::size_t t = 0; t < input.triangle_count(); ++t) {
     const std::uint32_t* corner = &input.indices[3 * t];
-    const Triangle p = corners_of(t);
-    double best2 = kInfinity;
     std::array<std::uint32_t, 4> own{image_of(t), vertex_best[corner[0]], vertex_best[corner[1]], vertex_best[corner[2]]};
-    for (std::uint32_t candidate : own) {
-      if (candidate == kNone) continue;
-      const Triangle& tri = output_corners[candidate];
-      double worst2 = 0.0;
-      for (const Vec& x : p) {
-        if (near_corner(x, tri, std::max(worst2, total2))) continue;
-        worst2 = std::max(worst2, bounder.distance2(x, candidate));
-        if (worst2 >= best2) break;
-      }
-      best2 = std::min(best2, worst2);
-      if (best2 <= total2) break;
-    }
+    std::sort(own.begin(), own.end());
+    const auto distinct = static_cast<std::size_t>(std::unique(own.begin(), own.end()) - own.begin());
+    const std::span<const std::uint32_t> few(own.data(), own[distinct - 1] == kNone ? distinct - 1 : distinct);
+    const Triangle p = corners(input, t);
+    const double best2 = bounder.single_bound2(p, few, total2);
     if (best2 == kInfinity) {
       unresolved.push_back(static_cast<std::uint32_t>(t));
       continue;
@@ -248,12 +216,9 @@ double hausdorff_upper_bound(const NodeMesh& input, const NodeMesh& output, cons
     if (best2 <= total2) continue;
     // the prism pieces of these few candidates: they cover most triangles that straddle an
     // output edge (the two triangles are the corners' nearest)
-    std::sort(own.begin(), own.end());
-    const auto distinct = static_cast<std::size_t>(std::unique(own.begin(), own.end()) - own.begin());
-    const std::span<const std::uint32_t> few(own.data(), own[distinct - 1] == kNone ? distinct - 1 : distinct);
     const double prism2 = bounder.prism_bound2(p, few, total2);
     if (prism2 == kInfinity) pending.push_back({best2, static_cast<std::uint32_t>(t)});
-    else if (std::min(prism2, best2) > total2) total2 = std::max(total2, std::min(best2, closer_look(p, few, total2)));
+    else if (std::min(prism2, best2) > total2) total2 = std::max(total2, std::min(best2, closer_look(p, few, prism2, total2)));
   }
 
   // The closer look, worst first: the candidates and the fans around the corners' clusters.
@@ -272,9 +237,10 @@ double hausdorff_upper_bound(const NodeMesh& input, const NodeMesh& output, cons
     if (have_fans)
       for (std::size_t k = 0; k < 3; ++k)
         for (std::uint32_t candidate : fan(corner[k])) add(candidate);
-    return closer_look(corners_of(t), candidates, enough2);
+    const Triangle part = corners(input, t);
+    return closer_look(part, candidates, bounder.prism_bound2(part, candidates, enough2), enough2);
   });
-  if (!unresolved.empty()) total2 = bvh_bound2(input, output_corners, output, unresolved, total2);
+  if (!unresolved.empty()) total2 = bvh_bound2(input, bounder, bvh(), unresolved, total2);
   return finish(total2, input, output);
 }
 
@@ -283,7 +249,9 @@ double hausdorff_upper_bound(const NodeMesh& input, const NodeMesh& output) {
   if (output.triangle_count() == 0) return kInfinity;
   std::vector<std::uint32_t> all(input.triangle_count());
   for (std::size_t t = 0; t < all.size(); ++t) all[t] = static_cast<std::uint32_t>(t);
-  return finish(bvh_bound2(input, triangle_corners(output), output, all, 0.0), input, output);
+  const std::vector<Triangle> output_corners = triangle_corners(output);
+  const measure::TriangleBvh bvh(output.vertices, output.layout.floats(), output.indices);
+  return finish(bvh_bound2(input, PartBounder(output_corners), bvh, all, 0.0), input, output);
 }
 
 }  // namespace octolod::bake

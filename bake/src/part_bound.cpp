@@ -15,6 +15,15 @@ constexpr double kCloseEnough2 = 1.05 * 1.05;
 // The prism pieces cover a part when their areas add up to its area within this share.
 constexpr double kCoverTolerance = 1e-9;
 
+// |x - corner| bounds dist(x, T) from above: a corner of T within sqrt(limit2) of x settles x.
+bool near_corner(const Vec3d& x, const Triangle3d& tri, double limit2) {
+  for (const Vec3d& corner : tri) {
+    const Vec3d d = sub(x, corner);
+    if (dot(d, d) <= limit2) return true;
+  }
+  return false;
+}
+
 // Points and convex polygons in a plane's coordinates (a part clipped by a prism's sides).
 using Point2 = std::array<double, 2>;
 struct Polygon {
@@ -54,10 +63,8 @@ PartBounder::PartBounder(std::span<const Triangle3d> output) : output_(output) {
   sphere_.reserve(output.size());
   for (const Triangle3d& t : output) {
     normal_.push_back(cross(sub(t[1], t[0]), sub(t[2], t[0])));
-    const Vec3d center = centroid(t[0], t[1], t[2]);
-    double radius2 = 0.0;
-    for (const Vec3d& c : t) radius2 = std::max(radius2, dot(sub(c, center), sub(c, center)));
-    sphere_.push_back({center, std::sqrt(radius2) * (1.0 + 1e-9)});
+    const Sphere sphere = bounding_sphere(t[0], t[1], t[2]);
+    sphere_.push_back({sphere.center, sphere.radius * (1.0 + 1e-9)});
   }
 }
 
@@ -72,15 +79,18 @@ double PartBounder::nearest2(const Vec3d& p, std::span<const std::uint32_t> cand
   return best2;
 }
 
-double PartBounder::single_bound2(const Triangle3d& part, std::span<const std::uint32_t> candidates) const {
+double PartBounder::single_bound2(const Triangle3d& part, std::span<const std::uint32_t> candidates,
+                                  double settled2) const {
   double best2 = kInfinity;
   for (std::uint32_t candidate : candidates) {
     double worst2 = 0.0;
     for (const Vec3d& c : part) {
+      if (near_corner(c, output_[candidate], std::max(worst2, settled2))) continue;
       worst2 = std::max(worst2, distance2(c, candidate));
       if (worst2 >= best2) break;
     }
     best2 = std::min(best2, worst2);
+    if (best2 <= settled2) break;
   }
   return best2;
 }

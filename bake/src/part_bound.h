@@ -31,8 +31,11 @@ class PartBounder {
 
   // One piece: min over the candidates of the max over the part's corners of the distance to it.
   // Tight where the part lies over one output triangle; where it reaches across an output edge
-  // it is about how far it reaches.
-  double single_bound2(const Triangle3d& part, std::span<const std::uint32_t> candidates) const;
+  // it is about how far it reaches. A candidate within `settled2` ends the search (the result is
+  // then only known to be at most `settled2`), and a corner within that, or within the
+  // candidate's worst so far, of one of the candidate's corners is not measured (it cannot
+  // raise either). +infinity without candidates.
+  double single_bound2(const Triangle3d& part, std::span<const std::uint32_t> candidates, double settled2 = 0.0) const;
 
   // The prism pieces: the prism over each candidate facing like the part, along the part's
   // normal, cuts from it the convex piece that lies straight above or below that candidate, and
@@ -54,13 +57,9 @@ class PartBounder {
   static constexpr int kMaxRefineDepth = 4;
 
  private:
-  struct Sphere {
-    Vec3d center;
-    double radius;
-  };
   std::span<const Triangle3d> output_;
   std::vector<Vec3d> normal_;    // per output triangle: twice its area times its unit normal
-  std::vector<Sphere> sphere_;   // per output triangle: around its centroid, through its farthest corner
+  std::vector<Sphere> sphere_;   // per output triangle: bounding_sphere, widened by a hair for rounding
 };
 
 }  // namespace octolod::bake

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 
 namespace octolod::bake {
 
@@ -19,6 +20,18 @@ inline Vec3d midpoint(const Vec3d& a, const Vec3d& b) {
 }
 inline Vec3d centroid(const Vec3d& a, const Vec3d& b, const Vec3d& c) {
   return {(a[0] + b[0] + c[0]) / 3.0, (a[1] + b[1] + c[1]) / 3.0, (a[2] + b[2] + c[2]) / 3.0};
+}
+
+// The sphere around the centroid of (a, b, c) through its farthest corner.
+struct Sphere {
+  Vec3d center;
+  double radius;
+};
+inline Sphere bounding_sphere(const Vec3d& a, const Vec3d& b, const Vec3d& c) {
+  const Vec3d center = centroid(a, b, c);
+  double radius2 = 0.0;
+  for (const Vec3d* corner : {&a, &b, &c}) radius2 = std::max(radius2, dot(sub(*corner, center), sub(*corner, center)));
+  return {center, std::sqrt(radius2)};
 }
 
 // Squared distance from p to triangle (a,b,c), Ericson 2005, 5.1.5 ClosestPtPointTriangle; a
