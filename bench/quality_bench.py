@@ -15,7 +15,8 @@ count. It prints Markdown tables and checks the targets of issue 4:
     cut, the one closest to the count the reference does reach, is compared there;
   - default method beats bade2006 on RMS at equal triangle count. bade2006's cuts land on other
     counts, so its RMS is interpolated at the default cut's count, linearly in log(triangles) /
-    log(RMS) between its two nearest cuts of a denser ladder (or marked when out of its range).
+    log(RMS) between its two nearest cuts of a denser ladder, which has a fraction 20% above and
+    one 20% below each default cut (or marked when out of its range).
 
 The reference (OpenMesh, about a minute per count on 1M triangles) is cached: each count's
 `octolod reference` mesh and its `octolod eval` against the input are kept under
@@ -118,6 +119,17 @@ def bade_verdict(rows, row):
     return "n/a", None
 
 
+def bade_ladder(fractions, default):
+    """bade2006's fractions: the given ladder and, around every default cut (the extra
+    like-for-like one included), one 20% above and one 20% below, so that its RMS can be
+    interpolated at each default cut's count."""
+    ladder = {float(f) for f in fractions.split(",")}
+    for row in default["rows"]:
+        share = row["triangles"] / default["input_triangles"]
+        ladder |= {min(1.0, share * 1.2), share / 1.2}
+    return ",".join("%.6g" % f for f in sorted(ladder, reverse=True))
+
+
 def verdict(row, misses):
     if not like_for_like(row):
         return "no verdict: " + ", ".join(misses)
@@ -170,7 +182,7 @@ def main():
             default["rows"] = sorted(default["rows"] + [r for r in extra if r["triangles"] not in known],
                                      key=lambda r: -r["triangles"])
         bade_tree, bade_baked = bake(cli, args.work, ply, "bade2006", args.memory)
-        bade = compare(cli, ply, bade_tree, args.bade_fractions, args.samples)
+        bade = compare(cli, ply, bade_tree, bade_ladder(args.bade_fractions, default), args.samples)
         results[shape] = {"bake": baked, "compare": default, "bade2006_bake": bade_baked,
                           "bade2006_compare": bade}
         shutil.rmtree(tree, ignore_errors=True)
