@@ -10,7 +10,8 @@
 // - the prism pieces: the prism over each candidate T along t's normal cuts from t the convex
 //   piece that lies straight above or below T. When the candidates facing like t tile its
 //   shadow (the pieces' areas add up to t's), this is within a few percent of the true distance;
-// - else t is split in four (midpoints), a few levels deep, with closest-point queries
+// - else t is split in four (midpoints), a few levels deep, over the candidates, and where
+//   that stays well above the corners' distances, again with closest-point queries
 //   (measure::TriangleBvh) adding the output triangles nearest to each part.
 // Only triangles whose cheap single-candidate bound exceeds the total so far get a closer look,
 // worst first: the total is a max. Candidates come from the clustering's hints (error_bound.h,
