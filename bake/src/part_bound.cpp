@@ -159,10 +159,8 @@ double PartBounder::prism_bound2(const Triangle3d& part, std::span<const std::ui
                   part[0][2] + q[0] * x_axis[2] + q[1] * y_axis[2]};
       worst2 = std::max(worst2, distance2(x, candidate));
     }
-    // covered: the candidates after these would only overlap (and fail the test)
-    if (std::abs(covered - twice_area) <= kCoverTolerance * twice_area) return worst2;
   }
-  return kInfinity;
+  return std::abs(covered - twice_area) <= kCoverTolerance * twice_area ? worst2 : kInfinity;
 }
 
 double PartBounder::bound2(const Triangle3d& part, std::span<const std::uint32_t> candidates, double enough2,

@@ -41,10 +41,9 @@ class PartBounder {
   // normal, cuts from it the convex piece that lies straight above or below that candidate, and
   // each piece is bounded at its corners against its candidate. Only valid when the pieces cover
   // the part, which their areas adding up to its area tells (a gap in the candidates' shadow or
-  // an overlap, as where the output folds, changes the sum): the candidates are taken in order
-  // until they do (best first: the ones after would only overlap), +infinity if they never do.
-  // Corners whose distance along the normal to their candidate's plane is within `enough2` are
-  // not measured exactly (that distance bounds theirs; below `enough2` it cannot raise a total).
+  // an overlap, as where the output folds, changes the sum): +infinity otherwise. Corners whose
+  // distance along the normal to their candidate's plane is within `enough2` are not measured
+  // exactly (that distance bounds theirs; below `enough2` it cannot raise a total).
   double prism_bound2(const Triangle3d& part, std::span<const std::uint32_t> candidates, double enough2) const;
 
   // The prism pieces when they cover the part within `enough2`; else the smaller of them and the
