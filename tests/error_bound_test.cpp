@@ -8,10 +8,12 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <vector>
 
 #include "error_bound.h"
 #include "octolod/measure/triangle_bvh.h"
+#include "part_bound.h"
 
 namespace octolod::bake {
 namespace {
@@ -94,6 +96,22 @@ TEST(ErrorBound, AFoldInTheOutputDoesNotHideTheDistance) {
   const double bound = hausdorff_upper_bound(input, output);
   EXPECT_GE(bound, 0.01 * (1.0 - 1e-6));
   EXPECT_LE(bound, 0.011);
+}
+
+TEST(PartBound, ThePrismPiecesCountOnlyWhenTheyTileThePartsShadow) {
+  // The square's two triangles tile the straddling triangle's shadow: its bound is its height.
+  // A sheet 0.3 higher over the lower-right half overlaps them, and without the upper-left
+  // triangle the sheet and the lower-right one have exactly the triangle's area between them
+  // (the diagonal halves it) though half of it lies under neither: no prism bound either way.
+  const std::vector<Triangle3d> output{{{{0, 0, 0}, {1, 0, 0}, {1, 1, 0}}},
+                                       {{{0, 0, 0}, {1, 1, 0}, {0, 1, 0}}},
+                                       {{{0, 0, 0.3}, {1, 0, 0.3}, {1, 1, 0.3}}}};
+  const PartBounder bounder(output);
+  const Triangle3d part{{{0.1, 0.1, 0.01}, {0.9, 0.2, 0.01}, {0.2, 0.9, 0.01}}};
+  const std::vector<std::uint32_t> square{0, 1}, folded{0, 1, 2}, half_and_sheet{0, 2};
+  EXPECT_NEAR(std::sqrt(bounder.prism_bound2(part, square, 0.0)), 0.01, 1e-9);
+  EXPECT_EQ(bounder.prism_bound2(part, folded, 0.0), std::numeric_limits<double>::infinity());
+  EXPECT_EQ(bounder.prism_bound2(part, half_and_sheet, 0.0), std::numeric_limits<double>::infinity());
 }
 
 TEST(ErrorBound, AGapInTheOutputIsMeasuredAcrossIt) {

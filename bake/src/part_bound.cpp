@@ -2,6 +2,7 @@
 #include "part_bound.h"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <limits>
 
@@ -14,6 +15,8 @@ constexpr double kInfinity = std::numeric_limits<double>::infinity();
 constexpr double kCloseEnough2 = 1.05 * 1.05;
 // The prism pieces cover a part when their areas add up to its area within this share.
 constexpr double kCoverTolerance = 1e-9;
+// Pieces of one prism bound, at most (a part lies over a few output triangles).
+constexpr std::size_t kMaxPieces = 64;
 
 // |x - corner| bounds dist(x, T) from above: a corner of T within sqrt(limit2) of x settles x.
 bool near_corner(const Vec3d& x, const Triangle3d& tri, double limit2) {
@@ -24,28 +27,54 @@ bool near_corner(const Vec3d& x, const Triangle3d& tri, double limit2) {
   return false;
 }
 
-// Points and convex polygons in a plane's coordinates (a part clipped by a prism's sides).
+// Points and convex polygons in a plane's coordinates (a part clipped by a prism's sides). Each
+// corner knows the lines it lies on (bits 0-2: the prism's sides, 3-5: the part's own sides), so
+// that a piece's sides along a prism side are known without comparing coordinates.
 using Point2 = std::array<double, 2>;
 struct Polygon {
   std::array<Point2, 9> corner;
+  std::array<std::uint8_t, 9> on{};
   std::size_t size = 0;
 };
+constexpr std::uint8_t kPartSide0 = 1u << 3, kPartSide1 = 1u << 4, kPartSide2 = 1u << 5;
+constexpr unsigned kPartSides = kPartSide0 | kPartSide1 | kPartSide2;
+
+// A hash of a position's bits: equal positions have equal keys (+0 and -0 aside, which only
+// cost a match).
+std::uint64_t position_key(const Vec3d& p) {
+  std::uint64_t key = 0;
+  for (const double x : p) key = (key ^ std::bit_cast<std::uint64_t>(x)) * 0x9E3779B97F4A7C15ull + (key >> 29);
+  return key;
+}
 
 // Twice the signed area of (a, b, p): positive when p is left of a -> b.
 double left_of(const Point2& a, const Point2& b, const Point2& p) {
   return (b[0] - a[0]) * (p[1] - a[1]) - (b[1] - a[1]) * (p[0] - a[0]);
 }
 
-// The part of `polygon` left of the line a -> b.
-Polygon clip(const Polygon& polygon, const Point2& a, const Point2& b) {
+// left_of(a, b, p), 0 within `on_line` of the line: rounding puts a corner the part shares with
+// an output triangle on either side of that triangle's sides.
+double side_of(const Point2& a, const Point2& b, const Point2& p, double on_line) {
+  const double h = left_of(a, b, p);
+  return std::abs(h) <= on_line ? 0.0 : h;
+}
+
+// The part of `polygon` left of the line a -> b (side_of), the prism's side `line`.
+Polygon clip(const Polygon& polygon, const Point2& a, const Point2& b, std::size_t line, double on_line) {
+  const auto bit = static_cast<std::uint8_t>(1u << line);
   Polygon kept;
   for (std::size_t k = 0; k < polygon.size; ++k) {
+    const std::size_t next = (k + 1) % polygon.size;
     const Point2& p0 = polygon.corner[k];
-    const Point2& p1 = polygon.corner[(k + 1) % polygon.size];
-    const double h0 = left_of(a, b, p0), h1 = left_of(a, b, p1);
-    if (h0 >= 0.0) kept.corner[kept.size++] = p0;
+    const Point2& p1 = polygon.corner[next];
+    const double h0 = side_of(a, b, p0, on_line), h1 = side_of(a, b, p1, on_line);
+    if (h0 >= 0.0) {
+      kept.on[kept.size] = static_cast<std::uint8_t>(polygon.on[k] | (h0 == 0.0 ? bit : 0u));
+      kept.corner[kept.size++] = p0;
+    }
     if ((h0 > 0.0 && h1 < 0.0) || (h0 < 0.0 && h1 > 0.0)) {
       const double t = h0 / (h0 - h1);
+      kept.on[kept.size] = static_cast<std::uint8_t>((polygon.on[k] & polygon.on[next]) | bit);
       kept.corner[kept.size++] = {p0[0] + t * (p1[0] - p0[0]), p0[1] + t * (p1[1] - p0[1])};
     }
   }
@@ -61,7 +90,11 @@ std::uint32_t closest_triangle(const measure::TriangleBvh& bvh, const Vec3d& p) 
 PartBounder::PartBounder(std::span<const Triangle3d> output) : output_(output) {
   normal_.reserve(output.size());
   sphere_.reserve(output.size());
+  corner_key_.reserve(output.size());
   for (const Triangle3d& t : output) {
+    std::array<std::uint64_t, 3> key;
+    for (std::size_t k = 0; k < 3; ++k) key[k] = position_key(t[k]);
+    corner_key_.push_back(key);
     normal_.push_back(cross(sub(t[1], t[0]), sub(t[2], t[0])));
     const Sphere sphere = bounding_sphere(t[0], t[1], t[2]);
     sphere_.push_back({sphere.center, sphere.radius * (1.0 + 1e-9)});
@@ -106,7 +139,10 @@ double PartBounder::prism_bound2(const Triangle3d& part, std::span<const std::ui
   const Vec3d unit{n[0] / twice_area, n[1] / twice_area, n[2] / twice_area};
   const Vec3d x_axis{edge0[0] / length0, edge0[1] / length0, edge0[2] / length0};
   const Vec3d y_axis = cross(unit, x_axis);
-  const Polygon part2d{{{{0.0, 0.0}, {length0, 0.0}, {dot(edge1, x_axis), dot(edge1, y_axis)}}}, 3};
+  // corner k lies on the part's sides k - 1 and k
+  const Polygon part2d{{{{0.0, 0.0}, {length0, 0.0}, {dot(edge1, x_axis), dot(edge1, y_axis)}}},
+                       {kPartSide2 | kPartSide0, kPartSide0 | kPartSide1, kPartSide1 | kPartSide2},
+                       3};
   // the part's bounding sphere (around its centroid): a candidate whose sphere is farther from
   // it across the normal than both radii cannot reach under it
   const Vec3d middle = centroid(part[0], part[1], part[2]);
@@ -117,6 +153,10 @@ double PartBounder::prism_bound2(const Triangle3d& part, std::span<const std::ui
   }
   const double part_radius = std::sqrt(part_radius2);
   double covered = 0.0, worst2 = 0.0;
+  // the candidates with a piece, and the prism sides their pieces end at inside the part
+  std::uint32_t piece_triangle[kMaxPieces];
+  unsigned piece_open[kMaxPieces];
+  std::size_t piece_count = 0;
   for (std::uint32_t candidate : candidates) {
     const Sphere& sphere = sphere_[candidate];
     const Vec3d apart = sub(sphere.center, middle);
@@ -132,18 +172,32 @@ double PartBounder::prism_bound2(const Triangle3d& part, std::span<const std::ui
       const Vec3d r = sub(tri[j], part[0]);
       corner[j] = {dot(r, x_axis), dot(r, y_axis)};
     }
-    // the part against the prism's sides (the projected triangle winds counter-clockwise)
+    // the part against the prism's sides (the projected triangle winds counter-clockwise);
+    // left_of values this small are rounding: a millionth of a millionth of their scale
+    const double on_line = 1e-12 * reach * reach;
     std::array<std::array<double, 3>, 3> side;
     bool empty = false, inside = true;
     for (std::size_t e = 0; e < 3 && !empty; ++e) {
-      for (std::size_t k = 0; k < 3; ++k) side[e][k] = left_of(corner[e], corner[(e + 1) % 3], part2d.corner[k]);
+      for (std::size_t k = 0; k < 3; ++k) side[e][k] = side_of(corner[e], corner[(e + 1) % 3], part2d.corner[k], on_line);
       empty = side[e][0] < 0.0 && side[e][1] < 0.0 && side[e][2] < 0.0;
       inside = inside && side[e][0] >= 0.0 && side[e][1] >= 0.0 && side[e][2] >= 0.0;
     }
     if (empty) continue;
+    // clipped by the sides whose lines cut into the part (the others keep all of it, and a piece
+    // side along them can only be the part's own)
     Polygon piece = part2d;
-    for (std::size_t e = 0; e < 3 && !inside && piece.size > 0; ++e) piece = clip(piece, corner[e], corner[(e + 1) % 3]);
+    for (std::size_t e = 0; e < 3 && !inside && piece.size > 0; ++e)
+      if (side[e][0] < 0.0 || side[e][1] < 0.0 || side[e][2] < 0.0)
+        piece = clip(piece, corner[e], corner[(e + 1) % 3], e, on_line);
     if (piece.size < 3) continue;
+    if (piece_count == kMaxPieces) return kInfinity;
+    unsigned open = 0;
+    for (std::size_t k = 0; k < piece.size; ++k) {
+      const unsigned along = piece.on[k] & piece.on[(k + 1) % piece.size];
+      if ((along & kPartSides) == 0) open |= along;
+    }
+    piece_triangle[piece_count] = candidate;
+    piece_open[piece_count++] = open;
     for (std::size_t k = 1; k + 1 < piece.size; ++k) covered += left_of(piece.corner[0], piece.corner[k], piece.corner[k + 1]);
     // distance along the part's normal to the candidate's plane: affine in the plane's coordinates
     const double along0 = dot(sub(part[0], tri[0]), normal) / facing;
@@ -160,7 +214,33 @@ double PartBounder::prism_bound2(const Triangle3d& part, std::span<const std::ui
       worst2 = std::max(worst2, distance2(x, candidate));
     }
   }
-  return std::abs(covered - twice_area) <= kCoverTolerance * twice_area ? worst2 : kInfinity;
+  if (!(std::abs(covered - twice_area) <= kCoverTolerance * twice_area)) return kInfinity;
+  // The areas alone could add up with an overlap (a fold) cancelling a gap. Every piece side
+  // along a prism side inside the part has the output triangle across that edge (facing like the
+  // part, so its projection lies on the other side) among the pieces: the pieces' union has no
+  // border inside the part, so it covers it, and with the areas adding up they do not overlap.
+  // (The triangle across: one that runs the edge the other way, found by position, so that
+  // attribute seams and two-sided sheets do not hide it.)
+  // whether triangle t runs edge e of triangle `of` (corner e to e + 1) the other way
+  auto runs_back = [&](std::uint32_t t, std::uint32_t of, std::size_t e) {
+    const std::size_t from = (e + 1) % 3, to = e;
+    for (std::size_t k = 0; k < 3; ++k) {
+      const std::size_t next = (k + 1) % 3;
+      if (corner_key_[t][k] == corner_key_[of][from] && corner_key_[t][next] == corner_key_[of][to] &&
+          output_[t][k] == output_[of][from] && output_[t][next] == output_[of][to])
+        return true;
+    }
+    return false;
+  };
+  for (std::size_t i = 0; i < piece_count; ++i)
+    for (std::size_t e = 0; e < 3; ++e) {
+      if ((piece_open[i] & (1u << e)) == 0) continue;
+      bool across = false;
+      for (std::size_t j = 0; j < piece_count && !across; ++j)
+        across = j != i && runs_back(piece_triangle[j], piece_triangle[i], e);
+      if (!across) return kInfinity;
+    }
+  return worst2;
 }
 
 double PartBounder::bound2(const Triangle3d& part, std::span<const std::uint32_t> candidates, double enough2,

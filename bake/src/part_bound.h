@@ -22,7 +22,8 @@ std::uint32_t closest_triangle(const measure::TriangleBvh& bvh, const Vec3d& p);
 class PartBounder {
  public:
   // `output`: the output mesh's triangles (double corners), indexed as the candidates below;
-  // borrowed, must outlive the bounder. Keeps 56 bytes per triangle (normal, bounding sphere).
+  // borrowed, must outlive the bounder. Keeps 80 bytes per triangle (normal, bounding sphere,
+  // a key per corner).
   explicit PartBounder(std::span<const Triangle3d> output);
 
   double distance2(const Vec3d& p, std::uint32_t triangle) const;
@@ -40,8 +41,10 @@ class PartBounder {
   // The prism pieces: the prism over each candidate facing like the part, along the part's
   // normal, cuts from it the convex piece that lies straight above or below that candidate, and
   // each piece is bounded at its corners against its candidate. Only valid when the pieces cover
-  // the part, which their areas adding up to its area tells (a gap in the candidates' shadow or
-  // an overlap, as where the output folds, changes the sum): +infinity otherwise. Corners whose
+  // the part: their areas add up to its area (a gap in the candidates' shadow or an overlap, as
+  // where the output folds, changes the sum) and every piece that ends at an output edge inside
+  // the part has the triangle across it among the pieces (an overlap cannot cancel a gap then):
+  // +infinity otherwise. Corners whose
   // distance along the normal to their candidate's plane is within `enough2` are not measured
   // exactly (that distance bounds theirs; below `enough2` it cannot raise a total).
   double prism_bound2(const Triangle3d& part, std::span<const std::uint32_t> candidates, double enough2) const;
@@ -60,6 +63,7 @@ class PartBounder {
   std::span<const Triangle3d> output_;
   std::vector<Vec3d> normal_;    // per output triangle: twice its area times its unit normal
   std::vector<Sphere> sphere_;   // per output triangle: bounding_sphere, widened by a hair for rounding
+  std::vector<std::array<std::uint64_t, 3>> corner_key_;  // per output triangle: its corners' position keys
 };
 
 }  // namespace octolod::bake
