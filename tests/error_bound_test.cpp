@@ -98,19 +98,21 @@ TEST(ErrorBound, AFoldInTheOutputDoesNotHideTheDistance) {
   EXPECT_LE(bound, 0.011);
 }
 
-TEST(PartBound, ThePrismPiecesCountOnlyWhenTheyTileThePartsShadow) {
-  // The square's two triangles tile the straddling triangle's shadow: its bound is its height.
-  // A sheet 0.3 higher over the lower-right half overlaps them, and without the upper-left
-  // triangle the sheet and the lower-right one have exactly the triangle's area between them
-  // (the diagonal halves it) though half of it lies under neither: no prism bound either way.
+TEST(PartBound, ThePrismPiecesCountOnlyOnceTheyProvablyCoverThePart) {
+  // The square's two triangles tile the straddling triangle's shadow: its bound is its height,
+  // and a sheet 0.3 higher over the lower-right half, listed after them, is not looked at. Listed
+  // before them, the sheet and the lower-right triangle have exactly the part's area between them
+  // (the diagonal halves it) though half of it lies under neither; the areas alone would pass,
+  // the missing triangle across the diagonal does not. The same without the upper-left triangle.
   const std::vector<Triangle3d> output{{{{0, 0, 0}, {1, 0, 0}, {1, 1, 0}}},
                                        {{{0, 0, 0}, {1, 1, 0}, {0, 1, 0}}},
                                        {{{0, 0, 0.3}, {1, 0, 0.3}, {1, 1, 0.3}}}};
   const PartBounder bounder(output);
   const Triangle3d part{{{0.1, 0.1, 0.01}, {0.9, 0.2, 0.01}, {0.2, 0.9, 0.01}}};
-  const std::vector<std::uint32_t> square{0, 1}, folded{0, 1, 2}, half_and_sheet{0, 2};
+  const std::vector<std::uint32_t> square{0, 1}, square_first{0, 1, 2}, sheet_first{2, 0, 1}, half_and_sheet{0, 2};
   EXPECT_NEAR(std::sqrt(bounder.prism_bound2(part, square, 0.0)), 0.01, 1e-9);
-  EXPECT_EQ(bounder.prism_bound2(part, folded, 0.0), std::numeric_limits<double>::infinity());
+  EXPECT_NEAR(std::sqrt(bounder.prism_bound2(part, square_first, 0.0)), 0.01, 1e-9);
+  EXPECT_EQ(bounder.prism_bound2(part, sheet_first, 0.0), std::numeric_limits<double>::infinity());
   EXPECT_EQ(bounder.prism_bound2(part, half_and_sheet, 0.0), std::numeric_limits<double>::infinity());
 }
 

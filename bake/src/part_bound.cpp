@@ -157,6 +157,33 @@ double PartBounder::prism_bound2(const Triangle3d& part, std::span<const std::ui
   std::uint32_t piece_triangle[kMaxPieces];
   unsigned piece_open[kMaxPieces];
   std::size_t piece_count = 0;
+  // The areas alone could add up with an overlap (a fold) cancelling a gap. Every piece side
+  // along a prism side inside the part has the output triangle across that edge (facing like the
+  // part, so its projection lies on the other side) among the pieces: the pieces' union has no
+  // border inside the part, so it covers it, and with the areas adding up they do not overlap.
+  // (The triangle across: one that runs the edge the other way, found by position, so that
+  // attribute seams and two-sided sheets do not hide it.)
+  auto runs_back = [&](std::uint32_t t, std::uint32_t of, std::size_t e) {
+    const std::size_t from = (e + 1) % 3, to = e;
+    for (std::size_t k = 0; k < 3; ++k) {
+      const std::size_t next = (k + 1) % 3;
+      if (corner_key_[t][k] == corner_key_[of][from] && corner_key_[t][next] == corner_key_[of][to] &&
+          output_[t][k] == output_[of][from] && output_[t][next] == output_[of][to])
+        return true;
+    }
+    return false;
+  };
+  auto closed = [&] {
+    for (std::size_t i = 0; i < piece_count; ++i)
+      for (std::size_t e = 0; e < 3; ++e) {
+        if ((piece_open[i] & (1u << e)) == 0) continue;
+        bool across = false;
+        for (std::size_t j = 0; j < piece_count && !across; ++j)
+          across = j != i && runs_back(piece_triangle[j], piece_triangle[i], e);
+        if (!across) return false;
+      }
+    return true;
+  };
   for (std::uint32_t candidate : candidates) {
     const Sphere& sphere = sphere_[candidate];
     const Vec3d apart = sub(sphere.center, middle);
@@ -213,34 +240,11 @@ double PartBounder::prism_bound2(const Triangle3d& part, std::span<const std::ui
                   part[0][2] + q[0] * x_axis[2] + q[1] * y_axis[2]};
       worst2 = std::max(worst2, distance2(x, candidate));
     }
+    // the areas add up: the pieces so far cover the part or nothing will (the candidates after
+    // them could only overlap)
+    if (std::abs(covered - twice_area) <= kCoverTolerance * twice_area) return closed() ? worst2 : kInfinity;
   }
-  if (!(std::abs(covered - twice_area) <= kCoverTolerance * twice_area)) return kInfinity;
-  // The areas alone could add up with an overlap (a fold) cancelling a gap. Every piece side
-  // along a prism side inside the part has the output triangle across that edge (facing like the
-  // part, so its projection lies on the other side) among the pieces: the pieces' union has no
-  // border inside the part, so it covers it, and with the areas adding up they do not overlap.
-  // (The triangle across: one that runs the edge the other way, found by position, so that
-  // attribute seams and two-sided sheets do not hide it.)
-  // whether triangle t runs edge e of triangle `of` (corner e to e + 1) the other way
-  auto runs_back = [&](std::uint32_t t, std::uint32_t of, std::size_t e) {
-    const std::size_t from = (e + 1) % 3, to = e;
-    for (std::size_t k = 0; k < 3; ++k) {
-      const std::size_t next = (k + 1) % 3;
-      if (corner_key_[t][k] == corner_key_[of][from] && corner_key_[t][next] == corner_key_[of][to] &&
-          output_[t][k] == output_[of][from] && output_[t][next] == output_[of][to])
-        return true;
-    }
-    return false;
-  };
-  for (std::size_t i = 0; i < piece_count; ++i)
-    for (std::size_t e = 0; e < 3; ++e) {
-      if ((piece_open[i] & (1u << e)) == 0) continue;
-      bool across = false;
-      for (std::size_t j = 0; j < piece_count && !across; ++j)
-        across = j != i && runs_back(piece_triangle[j], piece_triangle[i], e);
-      if (!across) return kInfinity;
-    }
-  return worst2;
+  return kInfinity;
 }
 
 double PartBounder::bound2(const Triangle3d& part, std::span<const std::uint32_t> candidates, double enough2,

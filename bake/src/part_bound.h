@@ -43,8 +43,9 @@ class PartBounder {
   // each piece is bounded at its corners against its candidate. Only valid when the pieces cover
   // the part: their areas add up to its area (a gap in the candidates' shadow or an overlap, as
   // where the output folds, changes the sum) and every piece that ends at an output edge inside
-  // the part has the triangle across it among the pieces (an overlap cannot cancel a gap then):
-  // +infinity otherwise. Corners whose
+  // the part has the triangle across it among the pieces (an overlap cannot cancel a gap then).
+  // The candidates are taken in order until their areas add up (best first: the ones after could
+  // only overlap); +infinity when they never do, or do without that proof. Corners whose
   // distance along the normal to their candidate's plane is within `enough2` are not measured
   // exactly (that distance bounds theirs; below `enough2` it cannot raise a total).
   double prism_bound2(const Triangle3d& part, std::span<const std::uint32_t> candidates, double enough2) const;
