@@ -31,17 +31,12 @@ void InputDistances::gather() {
   sphere_.resize(triangles);
   for (std::size_t t = 0; t < triangles; ++t) {
     const std::uint32_t* v = &input.indices[3 * t];
-    const Sphere exact = bounding_sphere(position(v[0]), position(v[1]), position(v[2]));
+    const Sphere exact = bounding_sphere(vertex_position(input, v[0]), vertex_position(input, v[1]), vertex_position(input, v[2]));
     FloatSphere& sphere = sphere_[t];
     for (std::size_t i = 0; i < 3; ++i) sphere.center[i] = static_cast<float>(exact.center[i]);
     const Vec3d shift = sub(exact.center, {sphere.center[0], sphere.center[1], sphere.center[2]});
     sphere.radius = std::nextafter(static_cast<float>(exact.radius + std::sqrt(dot(shift, shift))), INFINITY);
   }
-}
-
-Vec3d InputDistances::position(std::uint32_t v) const {
-  const float* f = &out_.input.vertices[v * out_.input.layout.floats()];
-  return {f[0], f[1], f[2]};
 }
 
 void InputDistances::nearest2(std::span<const std::uint32_t> clusters, std::span<const Vec3d> points,
@@ -65,7 +60,7 @@ void InputDistances::nearest2(std::span<const std::uint32_t> clusters, std::span
         reaches = gap <= 0.0 || gap * gap < distance2[p];
       }
       if (!reaches) continue;
-      const Vec3d q0 = position(v[0]), q1 = position(v[1]), q2 = position(v[2]);
+      const Vec3d q0 = vertex_position(input, v[0]), q1 = vertex_position(input, v[1]), q2 = vertex_position(input, v[2]);
       for (std::size_t p = 0; p < points.size(); ++p)
         distance2[p] = std::min(distance2[p], point_triangle_distance2(points[p], q0, q1, q2));
     }

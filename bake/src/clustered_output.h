@@ -43,7 +43,6 @@ class InputDistances {
 
  private:
   void gather();
-  Vec3d position(std::uint32_t input_vertex) const;
 
   const ClusteredOutput& out_;
   bool gathered_ = false;

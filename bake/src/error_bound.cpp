@@ -39,8 +39,8 @@ using Triangle = Triangle3d;
 
 // A prism bound within twice its part's corner distances is taken as it is (the corners'
 // distances are a lower bound of the true one); above, the output may stand steep under the
-// part (the pieces lie straight over their triangles but far from them), and the split bound
-// with closest-point queries is tried as well.
+// part (the pieces lie straight over their triangles but far from them), and the split bounds
+// (closer_look below) are tried as well.
 constexpr double kPrismTrusted2 = 2.0 * 2.0;
 // The split bound over the candidates alone (no queries) is taken within 10% of the corners'
 // distances: on a 1M rock bake, queries after it lowered the sum of all stored errors by 0.003%
@@ -49,14 +49,9 @@ constexpr double kLocalTrusted2 = 1.1 * 1.1;
 constexpr double kInfinity = std::numeric_limits<double>::infinity();
 constexpr std::uint32_t kNone = 0xFFFFFFFFu;
 
-Vec position(const NodeMesh& mesh, std::uint32_t v) {
-  const float* f = &mesh.vertices[v * mesh.layout.floats()];
-  return {f[0], f[1], f[2]};
-}
-
 Triangle corners(const NodeMesh& mesh, std::size_t t) {
   const std::uint32_t* v = &mesh.indices[3 * t];
-  return {position(mesh, v[0]), position(mesh, v[1]), position(mesh, v[2])};
+  return {vertex_position(mesh, v[0]), vertex_position(mesh, v[1]), vertex_position(mesh, v[2])};
 }
 
 std::vector<Triangle> triangle_corners(const NodeMesh& mesh) {
@@ -95,7 +90,7 @@ double bvh_bound2(const NodeMesh& input, const PartBounder& bounder, const measu
     for (std::size_t k = 0; k < 3; ++k) {
       const std::uint32_t v = input.indices[3 * std::size_t{t} + k];
       if (nearest_triangle[v] != kNone) continue;
-      const Vec p = position(input, v);
+      const Vec p = vertex_position(input, v);
       nearest_triangle[v] = closest_triangle(bvh, p);
       total2 = std::max(total2, bounder.distance2(p, nearest_triangle[v]));
     }
@@ -153,7 +148,7 @@ double hausdorff_upper_bound(const NodeMesh& input, const NodeMesh& output, cons
   std::vector<std::uint32_t> vertex_best(input.vertex_count(), kNone);
   std::vector<double> vertex_best2(input.vertex_count(), kInfinity);
   auto offer = [&](std::uint32_t v, std::uint32_t triangle) {
-    const double d2 = bounder.distance2(position(input, v), triangle);
+    const double d2 = bounder.distance2(vertex_position(input, v), triangle);
     if (d2 < vertex_best2[v]) vertex_best2[v] = d2, vertex_best[v] = triangle;
   };
   for (std::size_t t = 0; t < input.triangle_count(); ++t)
@@ -180,7 +175,7 @@ double hausdorff_upper_bound(const NodeMesh& input, const NodeMesh& output, cons
     const std::uint32_t v = worst.front().second;
     std::pop_heap(worst.begin(), worst.end());
     worst.pop_back();
-    const Vec p = position(input, v);
+    const Vec p = vertex_position(input, v);
     vertex_best[v] = closest_triangle(bvh(), p);
     vertex_best2[v] = bounder.distance2(p, vertex_best[v]);
     total2 = std::max(total2, vertex_best2[v]);

@@ -13,7 +13,8 @@ constexpr double kInfinity = std::numeric_limits<double>::infinity();
 // A split part is not split further when its bound is within 5% of its corners' distances
 // (squared here): no split goes below those.
 constexpr double kCloseEnough2 = 1.05 * 1.05;
-// The prism pieces cover a part when their areas add up to its area within this share.
+// The prism pieces' areas add up to their part's when they do within this share (with the
+// closure test of prism_bound2, that they cover it).
 constexpr double kCoverTolerance = 1e-9;
 // Pieces of one prism bound, at most (a part lies over a few output triangles).
 constexpr std::size_t kMaxPieces = 64;

@@ -1,14 +1,26 @@
-// Exact point-to-triangle distance in double, and the few vector helpers around it, for the
-// bake's geometric tests (error bounds, diagonal flips, folded fans). Positions in any one frame (model units or a node's local coordinates).
+// Exact point-to-triangle distance in double, and the few vector helpers around it (a NodeMesh
+// vertex's position in double among them), for the bake's geometric tests (error bounds,
+// diagonal flips, folded fans). Positions in any one frame (model units or a node's local
+// coordinates).
 #pragma once
 
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstddef>
+#include <cstdint>
+
+#include "octolod/formats/node_file.h"
 
 namespace octolod::bake {
 
 using Vec3d = std::array<double, 3>;
+
+// Vertex v's position in double (model units).
+inline Vec3d vertex_position(const NodeMesh& mesh, std::uint32_t v) {
+  const float* f = &mesh.vertices[std::size_t{v} * mesh.layout.floats()];
+  return {f[0], f[1], f[2]};
+}
 
 inline Vec3d sub(const Vec3d& a, const Vec3d& b) { return {a[0] - b[0], a[1] - b[1], a[2] - b[2]}; }
 inline double dot(const Vec3d& a, const Vec3d& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
