@@ -195,7 +195,7 @@ double hausdorff_upper_bound(const NodeMesh& input, const NodeMesh& output, cons
     const double lower2 = std::max({bounder.nearest2(part[0], candidates), bounder.nearest2(part[1], candidates),
                                     bounder.nearest2(part[2], candidates)});
     if (prism2 <= kPrismTrusted2 * lower2) return prism2;
-    const double local2 = std::min(prism2, bounder.bound2(part, candidates, enough2, nullptr));
+    const double local2 = bounder.split_bound2(part, candidates, prism2, enough2, nullptr);
     if (local2 <= enough2 || local2 <= kLocalTrusted2 * lower2) return local2;
     return std::min(local2, bounder.bound2(part, candidates, enough2, &bvh()));
   };

@@ -88,6 +88,22 @@ std::uint32_t closest_triangle(const measure::TriangleBvh& bvh, const Vec3d& p) 
   return bvh.closest(glm::vec3(static_cast<float>(p[0]), static_cast<float>(p[1]), static_cast<float>(p[2]))).triangle;
 }
 
+namespace {
+
+// `candidates` with the triangles of `queries` nearest to `points` joined (sorted, distinct; held
+// in `storage`), or `candidates` as they are without queries.
+std::span<const std::uint32_t> with_nearest(std::span<const std::uint32_t> candidates, std::span<const Vec3d> points,
+                                            const measure::TriangleBvh* queries, std::vector<std::uint32_t>& storage) {
+  if (queries == nullptr) return candidates;
+  storage.assign(candidates.begin(), candidates.end());
+  for (const Vec3d& p : points) storage.push_back(closest_triangle(*queries, p));
+  std::sort(storage.begin(), storage.end());
+  storage.erase(std::unique(storage.begin(), storage.end()), storage.end());
+  return storage;
+}
+
+}  // namespace
+
 PartBounder::PartBounder(std::span<const Triangle3d> output) : output_(output) {
   normal_.reserve(output.size());
   sphere_.reserve(output.size());
@@ -250,26 +266,23 @@ double PartBounder::prism_bound2(const Triangle3d& part, std::span<const std::ui
 
 double PartBounder::bound2(const Triangle3d& part, std::span<const std::uint32_t> candidates, double enough2,
                            const measure::TriangleBvh* queries, int depth) const {
-  std::vector<std::uint32_t> extended;
-  auto extend = [&](std::span<const Vec3d> points) {
-    if (queries == nullptr) return;
-    if (extended.empty()) extended.assign(candidates.begin(), candidates.end());
-    for (const Vec3d& p : points) extended.push_back(closest_triangle(*queries, p));
-    std::sort(extended.begin(), extended.end());
-    extended.erase(std::unique(extended.begin(), extended.end()), extended.end());
-    candidates = extended;
-  };
   const Vec3d middle = centroid(part[0], part[1], part[2]);
-  if (depth == 0) extend(std::array<Vec3d, 4>{part[0], part[1], part[2], middle});
-  else extend(std::array<Vec3d, 1>{middle});
-  const double prism2 = prism_bound2(part, candidates, enough2);
+  std::vector<std::uint32_t> extended;
+  if (depth == 0) candidates = with_nearest(candidates, std::array<Vec3d, 4>{part[0], part[1], part[2], middle}, queries, extended);
+  else candidates = with_nearest(candidates, std::array<Vec3d, 1>{middle}, queries, extended);
+  return split_bound2(part, candidates, prism_bound2(part, candidates, enough2), enough2, queries, depth);
+}
+
+double PartBounder::split_bound2(const Triangle3d& part, std::span<const std::uint32_t> candidates, double prism2,
+                                 double enough2, const measure::TriangleBvh* queries, int depth) const {
   if (prism2 <= enough2) return prism2;
   const double single2 = std::min(prism2, single_bound2(part, candidates));
   if (depth >= kMaxRefineDepth || single2 <= enough2) return single2;
   const double lower2 = std::max({nearest2(part[0], candidates), nearest2(part[1], candidates), nearest2(part[2], candidates)});
   if (single2 <= lower2 * kCloseEnough2) return single2;
   const Triangle3d mid{midpoint(part[0], part[1]), midpoint(part[1], part[2]), midpoint(part[2], part[0])};
-  extend(mid);
+  std::vector<std::uint32_t> extended;
+  candidates = with_nearest(candidates, mid, queries, extended);
   const std::array<Triangle3d, 4> parts{
       {{part[0], mid[0], mid[2]}, {mid[0], part[1], mid[1]}, {mid[2], mid[1], part[2]}, {mid[0], mid[1], mid[2]}}};
   double result2 = 0.0;

@@ -57,6 +57,11 @@ class PartBounder {
   // corners and centroid, and to the split parts' midpoints, join the candidates.
   double bound2(const Triangle3d& part, std::span<const std::uint32_t> candidates, double enough2,
                 const measure::TriangleBvh* queries, int depth = 0) const;
+  // bound2 after its first step: `prism2` is prism_bound2(part, candidates, enough2), already
+  // known to the caller (with `queries`, candidates should hold the triangles nearest to the
+  // part's corners and centroid, as bound2 adds them).
+  double split_bound2(const Triangle3d& part, std::span<const std::uint32_t> candidates, double prism2,
+                      double enough2, const measure::TriangleBvh* queries, int depth = 0) const;
 
   static constexpr int kMaxRefineDepth = 4;
 
