@@ -38,7 +38,10 @@ enum class ClusterMethod {
   // from each other: a thin sheet such as a wall whose two faces share cells stays, two-sided,
   // while a smooth surface the cells fold is not doubled into a fin). For a wanted triangle count the grid
   // is adaptive: a coarser grid whose cells with the highest quadric error per area (where the
-  // surface bends inside the cell) are halved, as many as the count allows. The default.
+  // surface bends inside the cell) are halved, as many as the count allows. Where that drops
+  // surface (keeps less than 95% of the input's area: parts smaller than a cell, a city's boxes,
+  // vanish) the node's bade2006 fan is taken instead when it has no more triangles and a lower
+  // error bound (same boundary, so crack-freedom holds). The default.
   grid,
   // The seed's operator (Bade et al. 2006, 3.5): one representative for the whole node from the
   // node's summed quadric (pulled to the cell centre when it falls outside the cell), and every
