@@ -86,7 +86,12 @@ struct BakeOptions {
   // memory or streamed). Larger budgets mean fewer sorted runs and merges and, once the
   // vertices fit in half of it, the in-core soup path. At least program_bytes + kMinBakeBudget,
   // and enough for max_tris (the bake says how much when it is not; about 38 MiB with every
-  // attribute at max_tris 2000, most of it for the largest node's simplification).
+  // attribute at max_tris 2000, most of it for the largest node's simplification). The bake
+  // counts its own buffers; the process's RSS also holds what the allocator keeps of freed ones.
+  // With glibc, the CLI calls mallopt(M_ARENA_MAX, 2) and mallopt(M_MMAP_THRESHOLD, 1 MiB)
+  // before bake() (cli/src/cmd_bake.cpp: without them the 10M rock at 16M peaked 6.5 MiB higher,
+  // the 100M rock at 64M 5.1 MiB higher); a caller who wants the CLI's peaks does the same (they
+  // are process-wide, so the library leaves that choice to it).
   std::uint64_t memory_budget_bytes = std::uint64_t{64} << 20;
   // The part of memory_budget_bytes the process holds besides the bake (its code, libraries,
   // thread stacks): the CLI sets kCliProgramBytes so that its --memory caps the whole
