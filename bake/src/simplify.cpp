@@ -41,9 +41,9 @@ constexpr double kRecountShare = 0.85;
 
 // A grid step that keeps less than this share of its input's area has dropped whole parts (parts
 // smaller than a cell have no triangle with corners in three cells: a city's boxes), and the
-// node's fan (the seed's operator) is tried in its place. On a 1M rock no grid step kept less
-// than 0.952 where the fan's bound was lower; on a 1M city 422 of the 429 steps where it was
-// kept less (docs/benchmarks.md).
+// node's fan (the seed's operator) is tried in its place. Of the grid steps whose fan had the
+// lower bound, none kept less than 0.953 on a 1M rock, and 422 of 429 kept less than this on a
+// 1M city (docs/benchmarks.md).
 constexpr double kFanAreaShare = 0.95;
 
 // The grid method for a wanted triangle count: the adaptive grid searched with the fast count
