@@ -42,7 +42,7 @@ constexpr double kRecountShare = 0.85;
 // A grid step that keeps less than this share of its input's area has dropped whole parts (parts
 // smaller than a cell have no triangle with corners in three cells: a city's boxes), and the
 // node's fan (the seed's operator) is tried in its place. Of the grid steps whose fan had the
-// lower bound, none kept less than 0.953 on a 1M rock, and 422 of 429 kept less than this on a
+// lower bound, none kept less than 0.952 on a 1M rock, and 422 of 429 kept less than this on a
 // 1M city (docs/benchmarks.md).
 constexpr double kFanAreaShare = 0.95;
 
