@@ -379,12 +379,15 @@ void expect_random_cuts_add_no_open_edge(const LoadedTree& t, bool input_closed)
 TEST_F(LodTreeTest, RandomCutsOfAClosedRockHaveNoOpenEdge) {
   const LoadedTree t = bake_and_load(options(rock_ply(), "rock-cuts"));
   expect_random_cuts_add_no_open_edge(t, true);
+  EXPECT_EQ(t.manifest.stats.at("lod_fans"), 0.0) << "no grid step on a rock drops surface";
 }
 
 TEST_F(LodTreeTest, RandomCutsOfACityAddNoOpenEdge) {
   // The city's boxes are closed; its ground quad's outline is the only open boundary.
   const LoadedTree t = bake_and_load(options(city_ply(), "city-cuts"));
   expect_random_cuts_add_no_open_edge(t, false);
+  // some grid steps lost whole boxes and took their node's fan: those LODs are in the cuts too
+  EXPECT_GT(t.manifest.stats.at("lod_fans"), 0.0);
 }
 
 TEST_F(LodTreeTest, RandomCutsOfABade2006RockHaveNoOpenEdge) {

@@ -72,6 +72,7 @@ void take_fan_if_closer(const PreparedNode& node, SimplifyResult& result) {
   set_bade2006_attributes(node, fan);
   result.mesh = std::move(fan.mesh);
   result.error_bound = *fan_bound;
+  result.fan = true;
 }
 
 }  // namespace

@@ -79,6 +79,9 @@ struct SimplifyResult {
   // the output surface: max over points x of the input of dist(x, output). 0 when the output is
   // the input. Infinity when the output is empty but the input was not.
   double error_bound = 0.0;
+  // grid only: the step took the node's bade2006 fan instead of the grid's output (see
+  // ClusterMethod::grid)
+  bool fan = false;
 };
 
 // Simplifies one node's mesh. `cell` is the node's octree cell (model units); the input's
@@ -121,6 +124,7 @@ struct Lod {
   // Conservative geometric error of this LOD relative to the ORIGINAL surface, model units:
   // input_error + the sum of the error bounds of the steps that led here (triangle inequality).
   double error = 0.0;
+  bool fan = false;  // its step took the node's fan (SimplifyResult::fan)
 };
 
 // Successively coarser LODs of one node, each simplified from the previous one (sequential
