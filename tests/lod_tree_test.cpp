@@ -508,6 +508,8 @@ TEST_F(LodTreeTest, InternalNodesTooLargeToMergeAreBuiltStreamingCrackFreeAndBou
   ASSERT_TRUE(baked.ok()) << baked.status().message();
   const double streamed = baked->header.stats.at("lod_streamed_internal_nodes");
   EXPECT_GT(streamed, 0.0);
+  // boxes cut into many small nodes: some grid steps drop them and take the fan, bounded too
+  EXPECT_GT(baked->header.stats.at("lod_fans"), 0.0);
   const LoadedTree t = load_tree(o.output);
   expect_random_cuts_add_no_open_edge(t, false);
   const ErrorCheck check = expect_stored_errors_bound(t);  // every streamed LOD is simplified
