@@ -387,7 +387,10 @@ TEST_F(LodTreeTest, RandomCutsOfACityAddNoOpenEdge) {
   const LoadedTree t = bake_and_load(options(city_ply(), "city-cuts"));
   expect_random_cuts_add_no_open_edge(t, false);
   // some grid steps lost whole boxes and took their node's fan: those LODs are in the cuts too
-  EXPECT_GT(t.manifest.stats.at("lod_fans"), 0.0);
+  // (the sanitized builds' fifth of the city has no such step; SimplifyTest covers the fan there)
+  if (kScale == 1) {
+    EXPECT_GT(t.manifest.stats.at("lod_fans"), 0.0);
+  }
 }
 
 TEST_F(LodTreeTest, RandomCutsOfABade2006RockHaveNoOpenEdge) {
@@ -509,7 +512,10 @@ TEST_F(LodTreeTest, InternalNodesTooLargeToMergeAreBuiltStreamingCrackFreeAndBou
   const double streamed = baked->header.stats.at("lod_streamed_internal_nodes");
   EXPECT_GT(streamed, 0.0);
   // boxes cut into many small nodes: some grid steps drop them and take the fan, bounded too
-  EXPECT_GT(baked->header.stats.at("lod_fans"), 0.0);
+  // (not in the sanitized builds' smaller city)
+  if (kScale == 1) {
+    EXPECT_GT(baked->header.stats.at("lod_fans"), 0.0);
+  }
   const LoadedTree t = load_tree(o.output);
   expect_random_cuts_add_no_open_edge(t, false);
   const ErrorCheck check = expect_stored_errors_bound(t);  // every streamed LOD is simplified
