@@ -959,27 +959,6 @@ double measured_hausdorff(const NodeMesh& input, const NodeMesh& lod) {
   return measured;
 }
 
-TEST(SimplifyTest, GridStepTakesTheNodeFanWhereWholeBoxesVanish) {
-  // A slice of a small city (x below a quarter: 4,978 triangles, boxes 4-10 units wide, cut by
-  // the slice's side). At an eighth of it the grid's cells swallow whole boxes and keep less than
-  // 95% of the area; the node's fan (bade2006: its boundary fanned to one point, 116 triangles)
-  // has the lower bound, 16.8 against the grid's, and the step is exactly that fan, its bound
-  // measured. At half, the grid keeps the boxes and stays (12.1 < 16.8).
-  const NodeMesh city = make_sample(samplegen::Shape::city, 20'000);
-  const Bounds bounds = city.bounds();
-  const Node slice = split_at_x(city, bounds, bounds.min[0] + 0.25f * (bounds.max[0] - bounds.min[0]))[0];
-  const SimplifyResult fan = simplify(slice.mesh, slice.cell, bade2006());
-  const auto count = static_cast<std::uint32_t>(slice.mesh.triangle_count());
-  const SimplifyResult eighth = simplify(slice.mesh, slice.cell, grid_target(count / 8));
-  EXPECT_TRUE(eighth.mesh == fan.mesh) << eighth.mesh.triangle_count() << " triangles";
-  EXPECT_EQ(eighth.error_bound, fan.error_bound);
-  EXPECT_LE(measured_hausdorff(slice.mesh, eighth.mesh), eighth.error_bound);
-  EXPECT_TRUE(odd_edges(eighth.mesh) == odd_edges(slice.mesh));
-  const SimplifyResult half = simplify(slice.mesh, slice.cell, grid_target(count / 2));
-  EXPECT_GT(half.mesh.triangle_count(), fan.mesh.triangle_count());
-  EXPECT_LT(half.error_bound, fan.error_bound);
-}
-
 TEST(LodTest, EveryLodErrorBoundsTheMeasuredHausdorff) {
   const NodeMesh rock = make_sample(samplegen::Shape::rock, kBoundedRockTriangles);
   Bounds cube = rock.bounds();

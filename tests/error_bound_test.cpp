@@ -85,23 +85,6 @@ TEST(ErrorBound, HintsGiveTheSameBoundAsQueries) {
   EXPECT_NEAR(hinted, hausdorff_upper_bound(input, output), 1e-9);
 }
 
-TEST(ErrorBound, BelowALimitItIsTheBoundOrNothing) {
-  // hausdorff_upper_bound_below: the same bound when it is below the limit; nothing when the
-  // bound (about 0.5 across the gap here, 0.01 over the whole square) is not, whether the
-  // vertices spread over the input or the whole bound show it.
-  const NodeMesh input = triangles(kStraddling);
-  const NodeMesh whole = triangles(square(0.0f)), half = triangles({square(0.0f)[0]});
-  const double bound = hausdorff_upper_bound(input, whole), gap = hausdorff_upper_bound(input, half);
-  ASSERT_GT(gap, 0.4);
-  EXPECT_EQ(hausdorff_upper_bound_below(input, whole, 1.0), bound);
-  EXPECT_EQ(hausdorff_upper_bound_below(input, whole, bound * 1.001), bound);
-  EXPECT_FALSE(hausdorff_upper_bound_below(input, whole, bound).has_value());
-  EXPECT_FALSE(hausdorff_upper_bound_below(input, whole, 0.005).has_value());
-  EXPECT_EQ(hausdorff_upper_bound_below(input, half, 1.0), gap);
-  EXPECT_FALSE(hausdorff_upper_bound_below(input, half, 0.3).has_value());
-  EXPECT_FALSE(hausdorff_upper_bound_below(input, half, gap).has_value());
-}
-
 TEST(ErrorBound, AFoldInTheOutputDoesNotHideTheDistance) {
   // Over the lower-right half the output has a second sheet 0.3 higher, facing the same way:
   // the prism pieces overlap there (their areas add up to more than the input's), so the bound

@@ -709,7 +709,6 @@ Result<BakeReport> run_bake(const BakeOptions& given) {
     manifest.stats["lod_rereads"] = static_cast<double>(octree->lod_stats.reread_lods);
     manifest.stats["lod_kept_bytes_peak"] = static_cast<double>(octree->lod_stats.peak_kept_bytes);
     manifest.stats["lod_streamed_internal_nodes"] = static_cast<double>(octree->lod_stats.streamed_internal_nodes);
-    manifest.stats["lod_fans"] = static_cast<double>(octree->lod_stats.fan_lods);
     report.soup_in_core = soup->in_core;
     report.octree_in_memory = soup->mesh_consumed;
     manifest.stats["octree_in_memory"] = soup->mesh_consumed ? 1 : 0;

@@ -11,7 +11,6 @@
 #include <vector>
 
 #include "boundary_edges.h"
-#include "quadric.h"
 #include "wedges.h"
 #include "octolod/formats/bounds.h"
 #include "octolod/formats/node_file.h"
@@ -129,14 +128,5 @@ std::uint32_t choose_grid_resolution(const PreparedNode& node, std::size_t targe
 // The seed's operator: one representative, every boundary edge fanned to it. Empty when the node
 // has no boundary (a closed surface inside one node has nothing to fan).
 NodeMesh cluster_bade2006(const PreparedNode& node);
-// cluster_bade2006 in two halves: the fan with the representative's position only (its
-// attributes zero), enough to bound its error, and then those attributes.
-struct Bade2006Fan {
-  NodeMesh mesh;
-  std::array<double, 3> representative{};      // its position, the node's local frame
-  std::array<double, kMaxQuadricDim> mean{};   // of the node's vertex records, local frame
-};
-Bade2006Fan bade2006_fan(const PreparedNode& node);
-void set_bade2006_attributes(const PreparedNode& node, Bade2006Fan& fan);
 
 }  // namespace octolod::bake

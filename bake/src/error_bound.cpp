@@ -47,9 +47,6 @@ constexpr double kPrismTrusted2 = 2.0 * 2.0;
 // and cost 6% of the bake's CPU (docs/benchmarks.md).
 constexpr double kLocalTrusted2 = 1.1 * 1.1;
 constexpr double kInfinity = std::numeric_limits<double>::infinity();
-// hausdorff_upper_bound_below measures this many input vertices, spread over the input, before
-// the whole bound.
-constexpr std::size_t kGiveUpProbes = 64;
 constexpr std::uint32_t kNone = 0xFFFFFFFFu;
 
 Triangle corners(const NodeMesh& mesh, std::size_t t) {
@@ -83,10 +80,9 @@ double settle_pending(std::vector<Pending>& pending, double total2, Closer&& clo
 }
 
 // Raises `total2` to a bound over the input triangles `triangles` by closest-point queries
-// (`bvh` over the output triangles `bounder` bounds against). Gives up as soon as the total
-// (then a true distance, a lower bound) exceeds `give_up2`, returning it.
+// (`bvh` over the output triangles `bounder` bounds against).
 double bvh_bound2(const NodeMesh& input, const PartBounder& bounder, const measure::TriangleBvh& bvh,
-                  const std::vector<std::uint32_t>& triangles, double total2, double give_up2 = kInfinity) {
+                  const std::vector<std::uint32_t>& triangles, double total2) {
 
   // nearest output triangle of every corner; their max is a lower bound
   std::vector<std::uint32_t> nearest_triangle(input.vertex_count(), kNone);
@@ -97,7 +93,6 @@ double bvh_bound2(const NodeMesh& input, const PartBounder& bounder, const measu
       const Vec p = vertex_position(input, v);
       nearest_triangle[v] = closest_triangle(bvh, p);
       total2 = std::max(total2, bounder.distance2(p, nearest_triangle[v]));
-      if (total2 > give_up2) return total2;
     }
   }
   auto candidates_of = [&](std::uint32_t t) {
@@ -110,7 +105,6 @@ double bvh_bound2(const NodeMesh& input, const PartBounder& bounder, const measu
     if (bound2 > total2) pending.push_back({bound2, t});
   }
   return settle_pending(pending, total2, [&](std::uint32_t t, double enough2) {
-    if (enough2 > give_up2) return enough2;  // given up: the rest cannot lower the total
     return bounder.bound2(corners(input, t), candidates_of(t), enough2, &bvh);
   });
 }
@@ -255,26 +249,13 @@ double hausdorff_upper_bound(const NodeMesh& input, const NodeMesh& output, cons
 }
 
 double hausdorff_upper_bound(const NodeMesh& input, const NodeMesh& output) {
-  return hausdorff_upper_bound_below(input, output, kInfinity).value_or(kInfinity);
-}
-
-std::optional<double> hausdorff_upper_bound_below(const NodeMesh& input, const NodeMesh& output, double limit) {
-  if (input.triangle_count() == 0) return 0.0 < limit ? std::optional<double>(0.0) : std::nullopt;
-  if (output.triangle_count() == 0) return std::nullopt;  // +infinity
+  if (input.triangle_count() == 0) return 0.0;
+  if (output.triangle_count() == 0) return kInfinity;
   std::vector<std::uint32_t> all(input.triangle_count());
   for (std::size_t t = 0; t < all.size(); ++t) all[t] = static_cast<std::uint32_t>(t);
   const std::vector<Triangle> output_corners = triangle_corners(output);
   const measure::TriangleBvh bvh(output.vertices, output.layout.floats(), output.indices);
-  const PartBounder bounder(output_corners);
-  // a few vertices spread over the input first: one beyond the limit usually shows up among them
-  const std::size_t stride = std::max<std::size_t>(1, input.vertex_count() / kGiveUpProbes);
-  for (std::uint32_t v = 0; limit < kInfinity && v < input.vertex_count(); v += static_cast<std::uint32_t>(stride)) {
-    const Vec p = vertex_position(input, v);
-    if (bounder.distance2(p, closest_triangle(bvh, p)) > limit * limit) return std::nullopt;
-  }
-  const double bound = finish(bvh_bound2(input, bounder, bvh, all, 0.0, limit * limit), input, output);
-  if (bound < limit || limit == kInfinity) return bound;
-  return std::nullopt;  // (bvh_bound2 gave up, or finished at or above the limit)
+  return finish(bvh_bound2(input, PartBounder(output_corners), bvh, all, 0.0), input, output);
 }
 
 }  // namespace octolod::bake

@@ -3,7 +3,6 @@
 #pragma once
 
 #include <cstdint>
-#include <optional>
 #include <span>
 
 #include "octolod/formats/node_file.h"
@@ -18,12 +17,6 @@ namespace octolod::bake {
 // input triangles cut into pieces that each lie over one output triangle, or split).
 // Closest-point queries (measure::TriangleBvh) for every input vertex.
 double hausdorff_upper_bound(const NodeMesh& input, const NodeMesh& output);
-
-// The same bound when it is below `limit` (model units), else nothing (as for an empty output):
-// it gives up at the first input vertex found farther than `limit` from the output, measuring a
-// few vertices spread over the input first, so an output that cannot beat a known bound costs
-// little. With limit = +infinity: hausdorff_upper_bound, but nothing for an empty output.
-std::optional<double> hausdorff_upper_bound_below(const NodeMesh& input, const NodeMesh& output, double limit);
 
 // Where a vertex clustering sent the input (all spans index the input / output meshes given
 // with them; empty spans = unknown).

@@ -56,7 +56,7 @@ Result<std::vector<Lod>> build_lods(NodeMesh input, double input_error, const Bo
     const std::size_t count = simplified->mesh.triangle_count();
     if (count == 0 || count > accept) break;  // the locked boundary dominates
     error += simplified->error_bound;
-    lods.push_back({std::move(simplified->mesh), error, simplified->fan});
+    lods.push_back({std::move(simplified->mesh), error});
     if (lods.size() == 1) input = {};  // an internal node's merged input is no LOD of its own
   }
   if (lods.empty()) lods.push_back({std::move(input), error});

@@ -108,7 +108,6 @@ struct NodeDone {
   // whose LOD 0 the parent reads from its file
   NodeMesh finest;
   bool streamed = false;  // an internal node built by run_streamed_internal
-  std::uint64_t fan_lods = 0;  // LODs whose grid step took the node's fan
 };
 
 // A thread's reusable buffers.
@@ -338,7 +337,6 @@ class LodTreeBuilder::Impl {
       if (error_.ok()) error_ = done.status();
     } else if (error_.ok()) {
       stats_.streamed_internal_nodes += done->streamed;
-      stats_.fan_lods += done->fan_lods;
       done->lods.bounds.extend(below);
       deliver(task.node, std::move(done).value());
     }
@@ -526,7 +524,6 @@ class LodTreeBuilder::Impl {
       info.file = file;
       done.lods.bounds.extend(mesh.bounds());
       done.lods.lods.push_back(std::move(info));
-      done.fan_lods += lods[i].fan;
     }
     if (!lods.empty()) done.finest = std::move(lods.front().mesh);
     return done;

@@ -150,8 +150,6 @@ struct LodTreeStats {
   // internal nodes built streaming because their children's LODs were too large to merge in
   // memory (lod_tree.cpp, run_streamed_internal)
   std::uint64_t streamed_internal_nodes = 0;
-  // node LODs whose grid step took the node's bade2006 fan (ClusterMethod::grid)
-  std::uint64_t fan_lods = 0;
 };
 
 class LodTreeBuilder {

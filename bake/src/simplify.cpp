@@ -39,13 +39,6 @@ Status check_mesh(const NodeMesh& mesh) {
 // and the step searches again with the exact count, keeping whichever result has more.
 constexpr double kRecountShare = 0.85;
 
-// A grid step that keeps less than this share of its input's area has dropped whole parts (parts
-// smaller than a cell have no triangle with corners in three cells: a city's boxes), and the
-// node's fan (the seed's operator) is tried in its place. Of the grid steps whose fan had the
-// lower bound, none kept less than 0.952 on a 1M rock, and 422 of 429 kept less than this on a
-// 1M city (docs/benchmarks.md).
-constexpr double kFanAreaShare = 0.95;
-
 // The grid method for a wanted triangle count: the adaptive grid searched with the fast count
 // (SearchCount::surviving), again with the exact one where that ended far below the target.
 ClusteredMesh cluster_for_target(const PreparedNode& node, std::size_t target) {
@@ -56,23 +49,6 @@ ClusteredMesh cluster_for_target(const PreparedNode& node, std::size_t target) {
                                              adaptive_grid_clustering(node, target, SearchCount::kept), node.origin);
   const std::size_t kept = exact.mesh.triangle_count();
   return kept > fast.mesh.triangle_count() && kept <= target ? std::move(exact) : std::move(fast);
-}
-
-// Replaces a grid step's `result` by the node's fan (cluster_bade2006: every locked boundary edge
-// fanned to one point, so the node's boundary and its crack-freedom are the same) when the grid
-// dropped surface (kFanAreaShare) and the fan has no more triangles and a lower error bound: where
-// whole parts vanish into cells, a surface through the node's middle is nearer to them than
-// nothing. The fan is bounded only as far as it can win.
-void take_fan_if_closer(const PreparedNode& node, SimplifyResult& result) {
-  if (node.boundary.edges.empty() || !(surface_area(face_normals(result.mesh)) < kFanAreaShare * node.area)) return;
-  Bade2006Fan fan = bade2006_fan(node);
-  if (fan.mesh.triangle_count() == 0 || fan.mesh.triangle_count() > result.mesh.triangle_count()) return;
-  const std::optional<double> fan_bound = hausdorff_upper_bound_below(node.mesh(), fan.mesh, result.error_bound);
-  if (!fan_bound) return;
-  set_bade2006_attributes(node, fan);
-  result.mesh = std::move(fan.mesh);
-  result.error_bound = *fan_bound;
-  result.fan = true;
 }
 
 }  // namespace
@@ -112,7 +88,6 @@ Result<SimplifyResult> simplify_node(const NodeMesh& input, const Bounds& cell,
                                                            : cluster_grid(node, options.grid_resolution);
     result.mesh = std::move(clustered.mesh);
     result.error_bound = hausdorff_upper_bound(node.mesh(), result.mesh, clustered.hints());
-    if (options.target_triangles > 0) take_fan_if_closer(node, result);
     return result;
   }
   result.error_bound = hausdorff_upper_bound(node.mesh(), result.mesh);

@@ -38,10 +38,7 @@ enum class ClusterMethod {
   // from each other: a thin sheet such as a wall whose two faces share cells stays, two-sided,
   // while a smooth surface the cells fold is not doubled into a fin). For a wanted triangle count the grid
   // is adaptive: a coarser grid whose cells with the highest quadric error per area (where the
-  // surface bends inside the cell) are halved, as many as the count allows. Where that drops
-  // surface (keeps less than 95% of the input's area: parts smaller than a cell, a city's boxes,
-  // vanish) the node's bade2006 fan is taken instead when it has no more triangles and a lower
-  // error bound (same boundary, so crack-freedom holds). The default.
+  // surface bends inside the cell) are halved, as many as the count allows. The default.
   grid,
   // The seed's operator (Bade et al. 2006, 3.5): one representative for the whole node from the
   // node's summed quadric (pulled to the cell centre when it falls outside the cell), and every
@@ -79,9 +76,6 @@ struct SimplifyResult {
   // the output surface: max over points x of the input of dist(x, output). 0 when the output is
   // the input. Infinity when the output is empty but the input was not.
   double error_bound = 0.0;
-  // grid only: the step took the node's bade2006 fan instead of the grid's output (see
-  // ClusterMethod::grid)
-  bool fan = false;
 };
 
 // Simplifies one node's mesh. `cell` is the node's octree cell (model units); the input's
@@ -124,7 +118,6 @@ struct Lod {
   // Conservative geometric error of this LOD relative to the ORIGINAL surface, model units:
   // input_error + the sum of the error bounds of the steps that led here (triangle inequality).
   double error = 0.0;
-  bool fan = false;  // its step took the node's fan (SimplifyResult::fan)
 };
 
 // Successively coarser LODs of one node, each simplified from the previous one (sequential
