@@ -83,7 +83,6 @@ double settle_pending(std::vector<Pending>& pending, double total2, Closer&& clo
 // (`bvh` over the output triangles `bounder` bounds against).
 double bvh_bound2(const NodeMesh& input, const PartBounder& bounder, const measure::TriangleBvh& bvh,
                   const std::vector<std::uint32_t>& triangles, double total2) {
-
   // nearest output triangle of every corner; their max is a lower bound
   std::vector<std::uint32_t> nearest_triangle(input.vertex_count(), kNone);
   for (std::uint32_t t : triangles) {

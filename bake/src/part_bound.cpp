@@ -82,14 +82,6 @@ Polygon clip(const Polygon& polygon, const Point2& a, const Point2& b, std::size
   return kept;
 }
 
-}  // namespace
-
-std::uint32_t closest_triangle(const measure::TriangleBvh& bvh, const Vec3d& p) {
-  return bvh.closest(glm::vec3(static_cast<float>(p[0]), static_cast<float>(p[1]), static_cast<float>(p[2]))).triangle;
-}
-
-namespace {
-
 // `candidates` with the triangles of `queries` nearest to `points` joined (sorted, distinct; held
 // in `storage`), or `candidates` as they are without queries.
 std::span<const std::uint32_t> with_nearest(std::span<const std::uint32_t> candidates, std::span<const Vec3d> points,
@@ -103,6 +95,10 @@ std::span<const std::uint32_t> with_nearest(std::span<const std::uint32_t> candi
 }
 
 }  // namespace
+
+std::uint32_t closest_triangle(const measure::TriangleBvh& bvh, const Vec3d& p) {
+  return bvh.closest(glm::vec3(static_cast<float>(p[0]), static_cast<float>(p[1]), static_cast<float>(p[2]))).triangle;
+}
 
 PartBounder::PartBounder(std::span<const Triangle3d> output) : output_(output) {
   normal_.reserve(output.size());
