@@ -1040,7 +1040,23 @@ TEST(LodTest, InternalNodeModeStartsWithASimplification) {
   ASSERT_GE(lods->size(), 2u);
   EXPECT_LT(lods->front().mesh.triangle_count(), rock.triangle_count());
   EXPECT_GT(lods->front().error, 0.01);
-  // an input already at most min_triangles: its only LOD is the input with its error
+  // a node below the root (lod_tree.h): its chain stops at a higher min_triangles, but its
+  // input is simplified once all the same (input_min_triangles)
+  LodOptions node = options;
+  node.min_triangles = 8'000;
+  auto once = build_lods(rock, 0.01, rock.bounds(), node);
+  ASSERT_TRUE(once.ok());
+  ASSERT_EQ(once->size(), 1u);
+  EXPECT_LE(once->front().mesh.triangle_count(), rock.triangle_count() / 2);
+  EXPECT_GT(once->front().error, 0.01);
+  node.min_triangles = 1'000;  // on past the first LOD while over it, then stop
+  auto chain = build_lods(rock, 0.01, rock.bounds(), node);
+  ASSERT_TRUE(chain.ok());
+  ASSERT_GE(chain->size(), 2u);
+  EXPECT_LE(chain->back().mesh.triangle_count(), node.min_triangles);
+  EXPECT_GT(chain.value()[chain->size() - 2].mesh.triangle_count(), node.min_triangles);
+  EXPECT_LT(chain->size(), lods->size());
+  // an input already at most input_min_triangles: its only LOD is the input with its error
   const NodeMesh small = make_sample(samplegen::Shape::rock, 200);
   auto single = build_lods(small, 0.02, small.bounds(), options);
   ASSERT_TRUE(single.ok());

@@ -177,6 +177,12 @@ TEST_F(LodTreeTest, EveryNodeHasAChainWhoseErrorsGrowAsItsTrianglesShrink) {
     EXPECT_LE(n.lods[0].triangles, finest) << n.path;
   }
   EXPECT_GT(internal, 0u);
+  // The nodes below the root stop their chains at node_min_triangles: a LOD is only followed by
+  // a coarser one while it has more.
+  const std::uint32_t node_min = LodTreeOptions{}.node_min_triangles;
+  for (std::size_t i = 1; i < m.nodes.size(); ++i)
+    for (std::size_t k = 1; k < m.nodes[i].lods.size(); ++k)
+      EXPECT_GT(m.nodes[i].lods[k - 1].triangles, node_min) << m.nodes[i].path << " LOD " << k;
   // The root continues into a coarse chain: a distant rock costs a few hundred triangles.
   const NodeInfo& root = m.nodes[0];
   EXPECT_GE(root.lods.size(), 2u);

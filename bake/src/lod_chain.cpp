@@ -42,7 +42,9 @@ Result<std::vector<Lod>> build_lods(NodeMesh input, double input_error, const Bo
   // each step simplifies the last LOD (the input before the first)
   auto current = [&]() -> const NodeMesh& { return lods.empty() ? input : lods.back().mesh; };
 
-  while (lods.size() < options.max_lods && current().triangle_count() > options.min_triangles) {
+  // an internal node's first step goes by its own limit (LodOptions::input_min_triangles)
+  auto stop_at = [&] { return lods.empty() ? options.input_min_triangles : options.min_triangles; };
+  while (lods.size() < options.max_lods && current().triangle_count() > stop_at()) {
     const std::size_t previous = current().triangle_count();
     const auto target = static_cast<std::size_t>(std::floor(static_cast<double>(previous) * options.reduction));
     // an internal node's first step only has to shrink its input (which is no LOD of its own)

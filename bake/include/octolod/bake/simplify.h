@@ -98,6 +98,10 @@ struct LodOptions {
   // The chain stops once a LOD has at most this many triangles: a distant asset costs a few
   // hundred triangles. Lower = longer chains (more files, more bake time).
   std::uint32_t min_triangles = 256;
+  // An internal node's input (include_input false) is simplified whenever it has more than this
+  // many triangles, even when min_triangles is higher: its LOD 0 then stands for its children at
+  // a coarser level instead of repeating their triangles.
+  std::uint32_t input_min_triangles = 256;
   // Each LOD has at most this fraction of the previous LOD's triangles; the chain stops when a
   // step cannot get there (the locked boundary dominates). In (0, 1).
   double reduction = 0.5;
@@ -106,8 +110,9 @@ struct LodOptions {
   // true (leaves): LOD 0 is the input itself, with input_error. false (internal nodes, whose
   // input is merge_meshes of one LOD per child, lod_tree.h): LOD 0 is the first
   // simplification of the input, which only has to be smaller than the input (not `reduction`
-  // times smaller); when even that fails (or the input is already at most min_triangles), LOD 0
-  // is the input itself, so an internal node always gets at least one LOD.
+  // times smaller); when even that fails (or the input is already at most
+  // input_min_triangles), LOD 0 is the input itself, so an internal node always gets at least
+  // one LOD.
   bool include_input = true;
   // SimplifyOptions::lock_boundary of every step: false only for the root.
   bool lock_boundary = true;
