@@ -147,6 +147,7 @@ double hausdorff_upper_bound(const NodeMesh& input, const NodeMesh& output, cons
   std::vector<std::uint32_t> vertex_best(input.vertex_count(), kNone);
   std::vector<double> vertex_best2(input.vertex_count(), kInfinity);
   auto offer = [&](std::uint32_t v, std::uint32_t triangle) {
+    if (vertex_best[v] == triangle) return;  // the image of a triangle next to it, measured
     const double d2 = bounder.distance2(vertex_position(input, v), triangle);
     if (d2 < vertex_best2[v]) vertex_best2[v] = d2, vertex_best[v] = triangle;
   };
@@ -199,17 +200,47 @@ double hausdorff_upper_bound(const NodeMesh& input, const NodeMesh& output, cons
     return std::min(local2, bounder.bound2(part, candidates, enough2, &bvh()));
   };
 
+  // A triangle's few candidates: its image and its corners' nearest triangles (sorted, distinct;
+  // held in `own`).
+  auto few_of = [&](std::size_t t, std::array<std::uint32_t, 4>& own) {
+    const std::uint32_t* corner = &input.indices[3 * t];
+    own = {image_of(t), vertex_best[corner[0]], vertex_best[corner[1]], vertex_best[corner[2]]};
+    std::sort(own.begin(), own.end());
+    const auto distinct = static_cast<std::size_t>(std::unique(own.begin(), own.end()) - own.begin());
+    return std::span<const std::uint32_t>(own.data(), own[distinct - 1] == kNone ? distinct - 1 : distinct);
+  };
+  // A triangle's candidates for the prism pieces: `few` (its image and its corners' nearest
+  // triangles, which cover most triangles that straddle an output edge), then the fans around its
+  // corners' clusters (which cover most of the others: a part whose shadow falls beyond its
+  // corners' nearest triangles). One prism over them all: half the triangles that needed one
+  // were not covered by the few alone, and a second prism over the fans repeated the first.
+  std::vector<std::uint32_t> candidates;
+  std::vector<std::uint32_t> added_in(output.triangle_count(), 0);  // the gathering that added it
+  std::uint32_t gathering = 0;
+  auto gather = [&](std::uint32_t t, std::span<const std::uint32_t> few) {
+    candidates.clear();
+    ++gathering;
+    auto add = [&](std::uint32_t candidate) {
+      if (added_in[candidate] == gathering) return;
+      added_in[candidate] = gathering;
+      candidates.push_back(candidate);
+    };
+    for (std::uint32_t candidate : few) add(candidate);
+    if (have_fans)
+      for (std::size_t k = 0; k < 3; ++k)
+        for (std::uint32_t candidate : fan(input.indices[3 * std::size_t{t} + k])) add(candidate);
+    return std::span<const std::uint32_t>(candidates);
+  };
+
   // Every triangle's cheap bound: the best of its image and its corners' nearest triangles as
   // the single candidate. A corner within total2 of one of the candidate's corners is not
   // measured (it cannot raise the total); a candidate within the total settles the triangle.
+  // Where it does not, the prism pieces; triangles they do not cover wait for the closer look.
   std::vector<Pending> pending;
   std::vector<std::uint32_t> unresolved;
+  std::array<std::uint32_t, 4> own;
   for (std::size_t t = 0; t < input.triangle_count(); ++t) {
-    const std::uint32_t* corner = &input.indices[3 * t];
-    std::array<std::uint32_t, 4> own{image_of(t), vertex_best[corner[0]], vertex_best[corner[1]], vertex_best[corner[2]]};
-    std::sort(own.begin(), own.end());
-    const auto distinct = static_cast<std::size_t>(std::unique(own.begin(), own.end()) - own.begin());
-    const std::span<const std::uint32_t> few(own.data(), own[distinct - 1] == kNone ? distinct - 1 : distinct);
+    const auto few = few_of(t, own);
     const Triangle p = corners(input, t);
     const double best2 = bounder.single_bound2(p, few, total2);
     if (best2 == kInfinity) {
@@ -217,31 +248,21 @@ double hausdorff_upper_bound(const NodeMesh& input, const NodeMesh& output, cons
       continue;
     }
     if (best2 <= total2) continue;
-    // the prism pieces of these few candidates: they cover most triangles that straddle an
-    // output edge (the two triangles are the corners' nearest)
-    const double prism2 = bounder.prism_bound2(p, few, total2);
+    // the fans only where the few do not cover the triangle (gather puts the few first)
+    PartBounder::Prism prism(bounder, p, total2);
+    auto offer_each = [&](std::span<const std::uint32_t> list) {
+      return std::any_of(list.begin(), list.end(), [&](std::uint32_t candidate) { return prism.offer(candidate); });
+    };
+    if (!offer_each(few)) offer_each(gather(static_cast<std::uint32_t>(t), few).subspan(few.size()));
+    const double prism2 = prism.bound2();
     if (prism2 == kInfinity) pending.push_back({best2, static_cast<std::uint32_t>(t)});
-    else if (std::min(prism2, best2) > total2) total2 = std::max(total2, std::min(best2, closer_look(p, few, prism2, total2)));
+    else if (std::min(prism2, best2) > total2)
+      total2 = std::max(total2, std::min(best2, closer_look(p, gather(static_cast<std::uint32_t>(t), few), prism2, total2)));
   }
 
-  // The closer look, worst first: the candidates and the fans around the corners' clusters.
-  std::vector<std::uint32_t> candidates;
-  std::vector<std::uint32_t> added_for(output.triangle_count(), kNone);
+  // The closer look for the triangles the prism pieces did not cover, worst first.
   total2 = settle_pending(pending, total2, [&](std::uint32_t t, double enough2) {
-    candidates.clear();
-    auto add = [&](std::uint32_t candidate) {
-      if (candidate == kNone || added_for[candidate] == t) return;
-      added_for[candidate] = t;
-      candidates.push_back(candidate);
-    };
-    const std::uint32_t* corner = &input.indices[3 * std::size_t{t}];
-    add(image_of(t));
-    for (std::size_t k = 0; k < 3; ++k) add(vertex_best[corner[k]]);
-    if (have_fans)
-      for (std::size_t k = 0; k < 3; ++k)
-        for (std::uint32_t candidate : fan(corner[k])) add(candidate);
-    const Triangle part = corners(input, t);
-    return closer_look(part, candidates, bounder.prism_bound2(part, candidates, enough2), enough2);
+    return closer_look(corners(input, t), gather(t, few_of(t, own)), kInfinity, enough2);
   });
   if (!unresolved.empty()) total2 = bvh_bound2(input, bounder, bvh(), unresolved, total2);
   return finish(total2, input, output);

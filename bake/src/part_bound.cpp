@@ -16,8 +16,6 @@ constexpr double kCloseEnough2 = 1.05 * 1.05;
 // The prism pieces' areas add up to their part's when they do within this share (with the
 // closure test of prism_bound2, that they cover it).
 constexpr double kCoverTolerance = 1e-9;
-// Pieces of one prism bound, at most (a part lies over a few output triangles).
-constexpr std::size_t kMaxPieces = 64;
 
 // |x - corner| bounds dist(x, T) from above: a corner of T within sqrt(limit2) of x settles x.
 bool near_corner(const Vec3d& x, const Triangle3d& tri, double limit2) {
@@ -141,123 +139,140 @@ double PartBounder::single_bound2(const Triangle3d& part, std::span<const std::u
   return best2;
 }
 
-double PartBounder::prism_bound2(const Triangle3d& part, std::span<const std::uint32_t> candidates,
-                                 double enough2) const {
+PartBounder::Prism::Prism(const PartBounder& bounder, const Triangle3d& part, double enough2)
+    : bounder_(bounder), part_(part), enough2_(enough2) {
   // the part's plane: origin part[0], orthonormal axes x (along its first edge) and y
   const Vec3d edge0 = sub(part[1], part[0]), edge1 = sub(part[2], part[0]);
   const Vec3d n = cross(edge0, edge1);
-  const double twice_area = std::sqrt(dot(n, n));
+  twice_area_ = std::sqrt(dot(n, n));
   const double length0 = std::sqrt(dot(edge0, edge0));
-  if (!(twice_area > 0.0 && length0 > 0.0)) return kInfinity;
-  const Vec3d unit{n[0] / twice_area, n[1] / twice_area, n[2] / twice_area};
-  const Vec3d x_axis{edge0[0] / length0, edge0[1] / length0, edge0[2] / length0};
-  const Vec3d y_axis = cross(unit, x_axis);
-  // corner k lies on the part's sides k - 1 and k
-  const Polygon part2d{{{{0.0, 0.0}, {length0, 0.0}, {dot(edge1, x_axis), dot(edge1, y_axis)}}},
-                       {kPartSide2 | kPartSide0, kPartSide0 | kPartSide1, kPartSide1 | kPartSide2},
-                       3};
+  if (!(twice_area_ > 0.0 && length0 > 0.0)) {
+    settled_ = true;
+    return;
+  }
+  unit_ = {n[0] / twice_area_, n[1] / twice_area_, n[2] / twice_area_};
+  x_axis_ = {edge0[0] / length0, edge0[1] / length0, edge0[2] / length0};
+  y_axis_ = cross(unit_, x_axis_);
+  part2d_[0] = {0.0, 0.0};
+  part2d_[1] = {length0, 0.0};
+  part2d_[2] = {dot(edge1, x_axis_), dot(edge1, y_axis_)};
   // the part's bounding sphere (around its centroid): a candidate whose sphere is farther from
   // it across the normal than both radii cannot reach under it
-  const Vec3d middle = centroid(part[0], part[1], part[2]);
-  double part_radius2 = 0.0;
+  middle_ = centroid(part[0], part[1], part[2]);
+  double radius2 = 0.0;
   for (const Vec3d& c : part) {
-    const Vec3d d = sub(c, middle);
-    part_radius2 = std::max(part_radius2, dot(d, d));
+    const Vec3d d = sub(c, middle_);
+    radius2 = std::max(radius2, dot(d, d));
   }
-  const double part_radius = std::sqrt(part_radius2);
-  double covered = 0.0, worst2 = 0.0;
-  // the candidates with a piece, and the prism sides their pieces end at inside the part
-  std::uint32_t piece_triangle[kMaxPieces];
-  unsigned piece_open[kMaxPieces];
-  std::size_t piece_count = 0;
-  // The areas alone could add up with an overlap (a fold) cancelling a gap. Every piece side
-  // along a prism side inside the part has the output triangle across that edge (facing like the
-  // part, so its projection lies on the other side) among the pieces: the pieces' union has no
-  // border inside the part, so it covers it, and with the areas adding up they do not overlap.
-  // (The triangle across: one that runs the edge the other way, found by position, so that
-  // attribute seams and two-sided sheets do not hide it.)
+  radius_ = std::sqrt(radius2);
+}
+
+bool PartBounder::Prism::offer(std::uint32_t candidate) {
+  if (settled_) return true;
+  const Sphere& sphere = bounder_.sphere_[candidate];
+  const Vec3d apart = sub(sphere.center, middle_);
+  const double across2 = dot(apart, apart) - dot(apart, unit_) * dot(apart, unit_);
+  const double reach = radius_ + sphere.radius;
+  if (across2 > reach * reach) return false;
+  const Triangle3d& tri = bounder_.output_[candidate];
+  const Vec3d& normal = bounder_.normal_[candidate];
+  const double facing = dot(normal, unit_);
+  if (!(facing > 0.0)) return false;  // faces away, or stands on edge: its prism is flat
+  Point2 corner[3];
+  for (std::size_t j = 0; j < 3; ++j) {
+    const Vec3d r = sub(tri[j], part_[0]);
+    corner[j] = {dot(r, x_axis_), dot(r, y_axis_)};
+  }
+  // the part against the prism's sides (the projected triangle winds counter-clockwise);
+  // left_of values this small are rounding: a millionth of a millionth of their scale
+  const double on_line = 1e-12 * reach * reach;
+  std::array<std::array<double, 3>, 3> side;
+  bool empty = false, inside = true;
+  for (std::size_t e = 0; e < 3 && !empty; ++e) {
+    for (std::size_t k = 0; k < 3; ++k) side[e][k] = side_of(corner[e], corner[(e + 1) % 3], part2d_[k], on_line);
+    empty = side[e][0] < 0.0 && side[e][1] < 0.0 && side[e][2] < 0.0;
+    inside = inside && side[e][0] >= 0.0 && side[e][1] >= 0.0 && side[e][2] >= 0.0;
+  }
+  if (empty) return false;
+  // clipped by the sides whose lines cut into the part (the others keep all of it, and a piece
+  // side along them can only be the part's own); corner k of the part lies on its sides k - 1 and k
+  Polygon piece{{part2d_[0], part2d_[1], part2d_[2]},
+                {kPartSide2 | kPartSide0, kPartSide0 | kPartSide1, kPartSide1 | kPartSide2},
+                3};
+  for (std::size_t e = 0; e < 3 && !inside && piece.size > 0; ++e)
+    if (side[e][0] < 0.0 || side[e][1] < 0.0 || side[e][2] < 0.0)
+      piece = clip(piece, corner[e], corner[(e + 1) % 3], e, on_line);
+  if (piece.size < 3) return false;
+  if (piece_count_ == kMaxPieces) {  // never seen: a part lies over a few output triangles
+    settled_ = true;
+    return true;
+  }
+  unsigned open = 0;
+  for (std::size_t k = 0; k < piece.size; ++k) {
+    const unsigned along = piece.on[k] & piece.on[(k + 1) % piece.size];
+    if ((along & kPartSides) == 0) open |= along;
+  }
+  piece_triangle_[piece_count_] = candidate;
+  piece_open_[piece_count_++] = open;
+  for (std::size_t k = 1; k + 1 < piece.size; ++k) covered_ += left_of(piece.corner[0], piece.corner[k], piece.corner[k + 1]);
+  // distance along the part's normal to the candidate's plane: affine in the plane's coordinates
+  const double along0 = dot(sub(part_[0], tri[0]), normal) / facing;
+  const double along_x = dot(x_axis_, normal) / facing, along_y = dot(y_axis_, normal) / facing;
+  for (std::size_t k = 0; k < piece.size; ++k) {
+    const Point2& q = piece.corner[k];
+    const double along = along0 + q[0] * along_x + q[1] * along_y;
+    if (along * along <= enough2_) {
+      worst2_ = std::max(worst2_, along * along);
+      continue;
+    }
+    const Vec3d x{part_[0][0] + q[0] * x_axis_[0] + q[1] * y_axis_[0], part_[0][1] + q[0] * x_axis_[1] + q[1] * y_axis_[1],
+                  part_[0][2] + q[0] * x_axis_[2] + q[1] * y_axis_[2]};
+    worst2_ = std::max(worst2_, bounder_.distance2(x, candidate));
+  }
+  // the areas add up: the pieces so far cover the part or nothing will (the candidates after
+  // them could only overlap)
+  if (std::abs(covered_ - twice_area_) > kCoverTolerance * twice_area_) return false;
+  settled_ = true;
+  covers_ = closed();
+  return true;
+}
+
+// The areas alone could add up with an overlap (a fold) cancelling a gap. Every piece side along
+// a prism side inside the part has the output triangle across that edge (facing like the part, so
+// its projection lies on the other side) among the pieces: the pieces' union has no border inside
+// the part, so it covers it, and with the areas adding up they do not overlap. (The triangle
+// across: one that runs the edge the other way, found by position, so that attribute seams and
+// two-sided sheets do not hide it.)
+bool PartBounder::Prism::closed() const {
+  const auto& key = bounder_.corner_key_;
+  const auto& output = bounder_.output_;
   auto runs_back = [&](std::uint32_t t, std::uint32_t of, std::size_t e) {
     const std::size_t from = (e + 1) % 3, to = e;
     for (std::size_t k = 0; k < 3; ++k) {
       const std::size_t next = (k + 1) % 3;
-      if (corner_key_[t][k] == corner_key_[of][from] && corner_key_[t][next] == corner_key_[of][to] &&
-          output_[t][k] == output_[of][from] && output_[t][next] == output_[of][to])
+      if (key[t][k] == key[of][from] && key[t][next] == key[of][to] && output[t][k] == output[of][from] &&
+          output[t][next] == output[of][to])
         return true;
     }
     return false;
   };
-  auto closed = [&] {
-    for (std::size_t i = 0; i < piece_count; ++i)
-      for (std::size_t e = 0; e < 3; ++e) {
-        if ((piece_open[i] & (1u << e)) == 0) continue;
-        bool across = false;
-        for (std::size_t j = 0; j < piece_count && !across; ++j)
-          across = j != i && runs_back(piece_triangle[j], piece_triangle[i], e);
-        if (!across) return false;
-      }
-    return true;
-  };
-  for (std::uint32_t candidate : candidates) {
-    const Sphere& sphere = sphere_[candidate];
-    const Vec3d apart = sub(sphere.center, middle);
-    const double across2 = dot(apart, apart) - dot(apart, unit) * dot(apart, unit);
-    const double reach = part_radius + sphere.radius;
-    if (across2 > reach * reach) continue;
-    const Triangle3d& tri = output_[candidate];
-    const Vec3d& normal = normal_[candidate];
-    const double facing = dot(normal, unit);
-    if (!(facing > 0.0)) continue;  // faces away, or stands on edge: its prism is flat
-    Point2 corner[3];
-    for (std::size_t j = 0; j < 3; ++j) {
-      const Vec3d r = sub(tri[j], part[0]);
-      corner[j] = {dot(r, x_axis), dot(r, y_axis)};
+  for (std::size_t i = 0; i < piece_count_; ++i)
+    for (std::size_t e = 0; e < 3; ++e) {
+      if ((piece_open_[i] & (1u << e)) == 0) continue;
+      bool across = false;
+      for (std::size_t j = 0; j < piece_count_ && !across; ++j)
+        across = j != i && runs_back(piece_triangle_[j], piece_triangle_[i], e);
+      if (!across) return false;
     }
-    // the part against the prism's sides (the projected triangle winds counter-clockwise);
-    // left_of values this small are rounding: a millionth of a millionth of their scale
-    const double on_line = 1e-12 * reach * reach;
-    std::array<std::array<double, 3>, 3> side;
-    bool empty = false, inside = true;
-    for (std::size_t e = 0; e < 3 && !empty; ++e) {
-      for (std::size_t k = 0; k < 3; ++k) side[e][k] = side_of(corner[e], corner[(e + 1) % 3], part2d.corner[k], on_line);
-      empty = side[e][0] < 0.0 && side[e][1] < 0.0 && side[e][2] < 0.0;
-      inside = inside && side[e][0] >= 0.0 && side[e][1] >= 0.0 && side[e][2] >= 0.0;
-    }
-    if (empty) continue;
-    // clipped by the sides whose lines cut into the part (the others keep all of it, and a piece
-    // side along them can only be the part's own)
-    Polygon piece = part2d;
-    for (std::size_t e = 0; e < 3 && !inside && piece.size > 0; ++e)
-      if (side[e][0] < 0.0 || side[e][1] < 0.0 || side[e][2] < 0.0)
-        piece = clip(piece, corner[e], corner[(e + 1) % 3], e, on_line);
-    if (piece.size < 3) continue;
-    if (piece_count == kMaxPieces) return kInfinity;
-    unsigned open = 0;
-    for (std::size_t k = 0; k < piece.size; ++k) {
-      const unsigned along = piece.on[k] & piece.on[(k + 1) % piece.size];
-      if ((along & kPartSides) == 0) open |= along;
-    }
-    piece_triangle[piece_count] = candidate;
-    piece_open[piece_count++] = open;
-    for (std::size_t k = 1; k + 1 < piece.size; ++k) covered += left_of(piece.corner[0], piece.corner[k], piece.corner[k + 1]);
-    // distance along the part's normal to the candidate's plane: affine in the plane's coordinates
-    const double along0 = dot(sub(part[0], tri[0]), normal) / facing;
-    const double along_x = dot(x_axis, normal) / facing, along_y = dot(y_axis, normal) / facing;
-    for (std::size_t k = 0; k < piece.size; ++k) {
-      const Point2& q = piece.corner[k];
-      const double along = along0 + q[0] * along_x + q[1] * along_y;
-      if (along * along <= enough2) {
-        worst2 = std::max(worst2, along * along);
-        continue;
-      }
-      const Vec3d x{part[0][0] + q[0] * x_axis[0] + q[1] * y_axis[0], part[0][1] + q[0] * x_axis[1] + q[1] * y_axis[1],
-                  part[0][2] + q[0] * x_axis[2] + q[1] * y_axis[2]};
-      worst2 = std::max(worst2, distance2(x, candidate));
-    }
-    // the areas add up: the pieces so far cover the part or nothing will (the candidates after
-    // them could only overlap)
-    if (std::abs(covered - twice_area) <= kCoverTolerance * twice_area) return closed() ? worst2 : kInfinity;
-  }
-  return kInfinity;
+  return true;
+}
+
+double PartBounder::prism_bound2(const Triangle3d& part, std::span<const std::uint32_t> candidates,
+                                 double enough2) const {
+  Prism prism(*this, part, enough2);
+  for (std::uint32_t candidate : candidates)
+    if (prism.offer(candidate)) break;
+  return prism.bound2();
 }
 
 double PartBounder::bound2(const Triangle3d& part, std::span<const std::uint32_t> candidates, double enough2,

@@ -6,6 +6,7 @@
 
 #include <array>
 #include <cstdint>
+#include <limits>
 #include <span>
 #include <vector>
 
@@ -49,6 +50,35 @@ class PartBounder {
   // distance along the normal to their candidate's plane is within `enough2` are not measured
   // exactly (that distance bounds theirs; below `enough2` it cannot raise a total).
   double prism_bound2(const Triangle3d& part, std::span<const std::uint32_t> candidates, double enough2) const;
+
+  // prism_bound2 one candidate at a time, for callers that find more candidates only when the
+  // first ones do not cover the part. Borrows the bounder and the part.
+  class Prism {
+   public:
+    Prism(const PartBounder& bounder, const Triangle3d& part, double enough2);
+    // Cuts the candidate's piece from the part. True once the outcome is known: the pieces
+    // cover the part (further candidates could only overlap), or never will (their areas add up
+    // without the proof of cover, a degenerate part, too many pieces).
+    bool offer(std::uint32_t candidate);
+    // The bound of the pieces once they cover the part, +infinity before or when they never will.
+    double bound2() const { return covers_ ? worst2_ : std::numeric_limits<double>::infinity(); }
+
+   private:
+    static constexpr std::size_t kMaxPieces = 64;
+    bool closed() const;
+
+    const PartBounder& bounder_;
+    const Triangle3d& part_;
+    double enough2_;
+    double twice_area_ = 0.0, radius_ = 0.0;  // the part's, and its bounding sphere's around middle_
+    Vec3d unit_{}, x_axis_{}, y_axis_{}, middle_{};  // its unit normal, its plane's axes, its centroid
+    std::array<std::array<double, 2>, 3> part2d_{};  // its corners in its plane (x_axis_, y_axis_)
+    double covered_ = 0.0, worst2_ = 0.0;  // twice the pieces' area, their bound
+    bool settled_ = false, covers_ = false;
+    std::size_t piece_count_ = 0;
+    std::uint32_t piece_triangle_[kMaxPieces];  // the candidates with a piece
+    unsigned piece_open_[kMaxPieces];           // the prism sides their pieces end at inside the part
+  };
 
   // The prism pieces when they cover the part within `enough2`; else the smaller of them and the
   // single candidate, the part split in four (midpoints) while that can lower it below the
