@@ -1,4 +1,4 @@
-// TriangleBvh: binned SAH build (Wald 2007) and nearest-first closest-point traversal with
+// TriangleBvh: binned SAH build (Wald 2007) along the widest axis and nearest-first closest-point traversal with
 // Ericson's point-triangle distance (Real-Time Collision Detection, 5.1.5).
 #include "octolod/measure/triangle_bvh.h"
 
@@ -183,58 +183,43 @@ void TriangleBvh::build(std::vector<Triangle> triangles) {
 
     std::uint32_t mid = task.begin;
     if (task.depth < kSahDepth) {
-      // binned SAH over all three axes, binned in one pass over the triangles
-      std::array<std::array<Box, kBins>, 3> bin_box;
-      std::array<std::array<std::uint32_t, kBins>, 3> bin_count{};
-      glm::vec3 scale{0.0f};
-      for (int a = 0; a < 3; ++a)
-        if (extent[a] > 0.0f) scale[a] = static_cast<float>(kBins) / extent[a];
+      // binned SAH along the widest centroid axis (all three cost the bake's small, many builds
+      // 3.5% of its time and made no query measurably faster: docs/benchmarks.md)
+      std::array<Box, kBins> bin_box;
+      std::array<std::uint32_t, kBins> bin_count{};
+      const float lo = centroid_bounds.min[axis], scale = static_cast<float>(kBins) / extent[axis];
+      auto bin_of = [&](std::uint32_t r) {
+        return static_cast<std::size_t>(std::min(kBins - 1, static_cast<int>((centroids[r][axis] - lo) * scale)));
+      };
       for (std::uint32_t i = task.begin; i < task.end; ++i) {
         const std::uint32_t r = refs[i];
-        for (int a = 0; a < 3; ++a) {
-          const auto b = static_cast<std::size_t>(
-              std::min(kBins - 1, static_cast<int>((centroids[r][a] - centroid_bounds.min[a]) * scale[a])));
-          bin_box[a][b].extend(boxes[r]);
-          ++bin_count[a][b];
-        }
+        const std::size_t b = bin_of(r);
+        bin_box[b].extend(boxes[r]);
+        ++bin_count[b];
+      }
+      // sweep from the right, then from the left
+      std::array<float, kBins> right_cost{};
+      Box acc;
+      std::uint32_t acc_count = 0;
+      for (std::size_t b = kBins - 1; b > 0; --b) {
+        acc.extend(bin_box[b]);
+        acc_count += bin_count[b];
+        right_cost[b] = acc_count ? acc.half_area() * static_cast<float>(acc_count) : 0.0f;
       }
       float best_cost = std::numeric_limits<float>::infinity();
-      int best_axis = -1, best_split = 0;
-      for (int a = 0; a < 3; ++a) {
-        if (!(extent[a] > 0.0f)) continue;
-        // sweep from the right, then from the left
-        std::array<float, kBins> right_cost{};
-        Box acc;
-        std::uint32_t acc_count = 0;
-        for (int b = kBins - 1; b > 0; --b) {
-          acc.extend(bin_box[a][static_cast<std::size_t>(b)]);
-          acc_count += bin_count[a][static_cast<std::size_t>(b)];
-          right_cost[static_cast<std::size_t>(b)] =
-              acc_count ? acc.half_area() * static_cast<float>(acc_count) : 0.0f;
-        }
-        acc = Box{};
-        acc_count = 0;
-        for (int b = 0; b < kBins - 1; ++b) {
-          acc.extend(bin_box[a][static_cast<std::size_t>(b)]);
-          acc_count += bin_count[a][static_cast<std::size_t>(b)];
-          if (acc_count == 0 || acc_count == count) continue;
-          float cost = acc.half_area() * static_cast<float>(acc_count) +
-                       right_cost[static_cast<std::size_t>(b + 1)];
-          if (cost < best_cost) {
-            best_cost = cost;
-            best_axis = a;
-            best_split = b + 1;
-          }
-        }
+      std::size_t best_split = 0;
+      acc = Box{};
+      acc_count = 0;
+      for (std::size_t b = 0; b + 1 < kBins; ++b) {
+        acc.extend(bin_box[b]);
+        acc_count += bin_count[b];
+        if (acc_count == 0 || acc_count == count) continue;
+        const float cost = acc.half_area() * static_cast<float>(acc_count) + right_cost[b + 1];
+        if (cost < best_cost) best_cost = cost, best_split = b + 1;
       }
-      if (best_axis >= 0) {
-        const float lo = centroid_bounds.min[best_axis], axis_scale = scale[best_axis];
+      if (best_split > 0) {
         auto it = std::partition(refs.begin() + task.begin, refs.begin() + task.end,
-                                 [&](std::uint32_t r) {
-                                   int b = std::min(kBins - 1,
-                                                    static_cast<int>((centroids[r][best_axis] - lo) * axis_scale));
-                                   return b < best_split;
-                                 });
+                                 [&](std::uint32_t r) { return bin_of(r) < best_split; });
         mid = static_cast<std::uint32_t>(it - refs.begin());
       }
     }

@@ -9,8 +9,9 @@
 // package set), a header-only template mass that costs tens of seconds of compile time per
 // translation unit, and it answers in double with exact predicates we do not need — the
 // distances we report are float model units. The queries here are exact in float arithmetic (the
-// same Ericson formulas CGAL and libigl use), the build is O(n log n) with 16 SAH bins, and the
-// whole thing is a few hundred lines. Throughput: see the comment of TriangleBvh below.
+// same Ericson formulas CGAL and libigl use), the build is O(n log n) with 16 SAH bins along the
+// widest axis, and the whole thing is a few hundred lines. Throughput: see the comment of
+// TriangleBvh below.
 #pragma once
 
 #include <cstdint>
