@@ -2,7 +2,6 @@
 #include "part_bound.h"
 
 #include <algorithm>
-#include <bit>
 #include <cmath>
 #include <limits>
 
@@ -37,14 +36,6 @@ struct Polygon {
 };
 constexpr std::uint8_t kPartSide0 = 1u << 3, kPartSide1 = 1u << 4, kPartSide2 = 1u << 5;
 constexpr unsigned kPartSides = kPartSide0 | kPartSide1 | kPartSide2;
-
-// A hash of a position's bits: equal positions have equal keys (+0 and -0 aside, which only
-// cost a match).
-std::uint64_t position_key(const Vec3d& p) {
-  std::uint64_t key = 0;
-  for (const double x : p) key = (key ^ std::bit_cast<std::uint64_t>(x)) * 0x9E3779B97F4A7C15ull + (key >> 29);
-  return key;
-}
 
 // Twice the signed area of (a, b, p): positive when p is left of a -> b.
 double left_of(const Point2& a, const Point2& b, const Point2& p) {
@@ -101,11 +92,7 @@ std::uint32_t closest_triangle(const measure::TriangleBvh& bvh, const Vec3d& p) 
 PartBounder::PartBounder(std::span<const Triangle3d> output) : output_(output) {
   normal_.reserve(output.size());
   sphere_.reserve(output.size());
-  corner_key_.reserve(output.size());
   for (const Triangle3d& t : output) {
-    std::array<std::uint64_t, 3> key;
-    for (std::size_t k = 0; k < 3; ++k) key[k] = position_key(t[k]);
-    corner_key_.push_back(key);
     normal_.push_back(cross(sub(t[1], t[0]), sub(t[2], t[0])));
     const Sphere sphere = bounding_sphere(t[0], t[1], t[2]);
     sphere_.push_back({sphere.center, sphere.radius * (1.0 + 1e-9)});
@@ -244,16 +231,11 @@ bool PartBounder::Prism::offer(std::uint32_t candidate) {
 // across: one that runs the edge the other way, found by position, so that attribute seams and
 // two-sided sheets do not hide it.)
 bool PartBounder::Prism::closed() const {
-  const auto& key = bounder_.corner_key_;
   const auto& output = bounder_.output_;
   auto runs_back = [&](std::uint32_t t, std::uint32_t of, std::size_t e) {
     const std::size_t from = (e + 1) % 3, to = e;
-    for (std::size_t k = 0; k < 3; ++k) {
-      const std::size_t next = (k + 1) % 3;
-      if (key[t][k] == key[of][from] && key[t][next] == key[of][to] && output[t][k] == output[of][from] &&
-          output[t][next] == output[of][to])
-        return true;
-    }
+    for (std::size_t k = 0; k < 3; ++k)
+      if (output[t][k] == output[of][from] && output[t][(k + 1) % 3] == output[of][to]) return true;
     return false;
   };
   for (std::size_t i = 0; i < piece_count_; ++i)

@@ -23,8 +23,7 @@ std::uint32_t closest_triangle(const measure::TriangleBvh& bvh, const Vec3d& p);
 class PartBounder {
  public:
   // `output`: the output mesh's triangles (double corners), indexed as the candidates below;
-  // borrowed, must outlive the bounder. Keeps 80 bytes per triangle (normal, bounding sphere,
-  // a key per corner).
+  // borrowed, must outlive the bounder. Keeps 56 bytes per triangle (normal, bounding sphere).
   explicit PartBounder(std::span<const Triangle3d> output);
 
   double distance2(const Vec3d& p, std::uint32_t triangle) const;
@@ -99,7 +98,6 @@ class PartBounder {
   std::span<const Triangle3d> output_;
   std::vector<Vec3d> normal_;    // per output triangle: twice its area times its unit normal
   std::vector<Sphere> sphere_;   // per output triangle: bounding_sphere, widened by a hair for rounding
-  std::vector<std::array<std::uint64_t, 3>> corner_key_;  // per output triangle: its corners' position keys
 };
 
 }  // namespace octolod::bake
