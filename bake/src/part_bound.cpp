@@ -2,6 +2,7 @@
 #include "part_bound.h"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <limits>
 
@@ -36,6 +37,20 @@ struct Polygon {
 };
 constexpr std::uint8_t kPartSide0 = 1u << 3, kPartSide1 = 1u << 4, kPartSide2 = 1u << 5;
 constexpr unsigned kPartSides = kPartSide0 | kPartSide1 | kPartSide2;
+
+// A hash of a position: equal positions (+0 and -0 alike) have equal keys.
+std::uint64_t position_key(const Vec3d& p) {
+  std::uint64_t key = 0;
+  for (const double x : p)
+    key = (key ^ std::bit_cast<std::uint64_t>(x == 0.0 ? 0.0 : x)) * 0x9E3779B97F4A7C15ull + (key >> 29);
+  return key;
+}
+
+// A signature of the directed edge from a position to another, from their keys.
+std::uint32_t edge_signature(std::uint64_t from, std::uint64_t to) {
+  const std::uint64_t h = (from * 0xC2B2AE3D27D4EB4Full) ^ (to + (to >> 31));
+  return static_cast<std::uint32_t>(h ^ (h >> 32));
+}
 
 // Twice the signed area of (a, b, p): positive when p is left of a -> b.
 double left_of(const Point2& a, const Point2& b, const Point2& p) {
@@ -92,7 +107,12 @@ std::uint32_t closest_triangle(const measure::TriangleBvh& bvh, const Vec3d& p) 
 PartBounder::PartBounder(std::span<const Triangle3d> output) : output_(output) {
   normal_.reserve(output.size());
   sphere_.reserve(output.size());
+  edge_signature_.reserve(output.size());
+  back_signature_.reserve(output.size());
   for (const Triangle3d& t : output) {
+    const std::array<std::uint64_t, 3> key{position_key(t[0]), position_key(t[1]), position_key(t[2])};
+    edge_signature_.push_back({edge_signature(key[0], key[1]), edge_signature(key[1], key[2]), edge_signature(key[2], key[0])});
+    back_signature_.push_back({edge_signature(key[1], key[0]), edge_signature(key[2], key[1]), edge_signature(key[0], key[2])});
     normal_.push_back(cross(sub(t[1], t[0]), sub(t[2], t[0])));
     const Sphere sphere = bounding_sphere(t[0], t[1], t[2]);
     sphere_.push_back({sphere.center, sphere.radius * (1.0 + 1e-9)});
@@ -231,19 +251,25 @@ bool PartBounder::Prism::offer(std::uint32_t candidate) {
 // across: one that runs the edge the other way, found by position, so that attribute seams and
 // two-sided sheets do not hide it.)
 bool PartBounder::Prism::closed() const {
+  // the directed edges of the pieces' triangles, by signature (equal positions, equal signatures)
+  std::array<std::uint32_t, 3 * kMaxPieces> edges;
+  const std::size_t edge_count = 3 * piece_count_;
+  for (std::size_t i = 0; i < piece_count_; ++i)
+    for (std::size_t k = 0; k < 3; ++k) edges[3 * i + k] = bounder_.edge_signature_[piece_triangle_[i]][k];
   const auto& output = bounder_.output_;
-  auto runs_back = [&](std::uint32_t t, std::uint32_t of, std::size_t e) {
-    const std::size_t from = (e + 1) % 3, to = e;
-    for (std::size_t k = 0; k < 3; ++k)
-      if (output[t][k] == output[of][from] && output[t][(k + 1) % 3] == output[of][to]) return true;
-    return false;
-  };
   for (std::size_t i = 0; i < piece_count_; ++i)
     for (std::size_t e = 0; e < 3; ++e) {
       if ((piece_open_[i] & (1u << e)) == 0) continue;
+      const std::uint32_t of = piece_triangle_[i];
+      const std::uint32_t back = bounder_.back_signature_[of][e];
+      const Vec3d &from = output[of][(e + 1) % 3], &to = output[of][e];
       bool across = false;
-      for (std::size_t j = 0; j < piece_count_ && !across; ++j)
-        across = j != i && runs_back(piece_triangle_[j], piece_triangle_[i], e);
+      for (std::size_t m = 0; m < edge_count && !across; ++m) {
+        if (edges[m] != back || m / 3 == i) continue;
+        const std::uint32_t t = piece_triangle_[m / 3];
+        const std::size_t k = m % 3;
+        across = output[t][k] == from && output[t][(k + 1) % 3] == to;
+      }
       if (!across) return false;
     }
   return true;
