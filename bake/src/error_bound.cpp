@@ -13,10 +13,11 @@
 // - else t is split in four (midpoints), a few levels deep, over the candidates, and where
 //   that stays well above the corners' distances, again with closest-point queries
 //   (measure::TriangleBvh) adding the output triangles nearest to each part.
-// Only triangles whose cheap single-candidate bound exceeds the total so far get a closer look,
-// worst first: the total is a max. Candidates come from the clustering's hints (error_bound.h,
-// ImageHints): the triangle's image, each corner's nearest image, the fans around its corners'
-// clusters. The version without hints takes every corner's nearest triangle by query.
+// Only triangles whose cheap single-candidate bound exceeds the total so far get the prism
+// pieces, and only those the pieces do not cover get the split, worst first: the total is a max.
+// Candidates come from the clustering's hints (error_bound.h, ImageHints): the triangle's image
+// and each corner's nearest image first, then the fans around its corners' clusters. The version
+// without hints takes every corner's nearest triangle by query.
 #include "error_bound.h"
 
 #include <algorithm>
