@@ -249,16 +249,22 @@ double hausdorff_upper_bound(const NodeMesh& input, const NodeMesh& output, cons
       continue;
     }
     if (best2 <= total2) continue;
-    // the fans only where the few do not cover the triangle (gather puts the few first)
+    // the fans only where the few do not cover the triangle (gather puts the few first; it is
+    // never empty, so an empty `all` means not gathered yet)
+    std::span<const std::uint32_t> all;
+    auto gathered = [&] {
+      if (all.empty()) all = gather(static_cast<std::uint32_t>(t), few);
+      return all;
+    };
     PartBounder::Prism prism(bounder, p, total2);
     auto offer_each = [&](std::span<const std::uint32_t> list) {
       return std::any_of(list.begin(), list.end(), [&](std::uint32_t candidate) { return prism.offer(candidate); });
     };
-    if (!offer_each(few)) offer_each(gather(static_cast<std::uint32_t>(t), few).subspan(few.size()));
+    if (!offer_each(few)) offer_each(gathered().subspan(few.size()));
     const double prism2 = prism.bound2();
     if (prism2 == kInfinity) pending.push_back({best2, static_cast<std::uint32_t>(t)});
     else if (std::min(prism2, best2) > total2)
-      total2 = std::max(total2, std::min(best2, closer_look(p, gather(static_cast<std::uint32_t>(t), few), prism2, total2)));
+      total2 = std::max(total2, std::min(best2, closer_look(p, gathered(), prism2, total2)));
   }
 
   // The closer look for the triangles the prism pieces did not cover, worst first.

@@ -1,5 +1,5 @@
-// TriangleBvh: binned SAH build (Wald 2007) along the widest axis and nearest-first closest-point traversal with
-// Ericson's point-triangle distance (Real-Time Collision Detection, 5.1.5).
+// TriangleBvh: binned SAH build (Wald 2007) along the widest axis and nearest-first closest-point
+// traversal with Ericson's point-triangle distance (Real-Time Collision Detection, 5.1.5).
 #include "octolod/measure/triangle_bvh.h"
 
 #include <algorithm>
