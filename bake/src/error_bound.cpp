@@ -145,16 +145,23 @@ double hausdorff_upper_bound(const NodeMesh& input, const NodeMesh& output, cons
 
   // Squared distances below. Every input vertex's nearest output triangle among the images of
   // the input triangles around it: a candidate of the triangles at the vertex.
+  // On the way, every input triangle's bound against its image alone (the max of its corners'
+  // distances to it), the first of its single candidates below.
   std::vector<std::uint32_t> vertex_best(input.vertex_count(), kNone);
   std::vector<double> vertex_best2(input.vertex_count(), kInfinity);
   auto offer = [&](std::uint32_t v, std::uint32_t triangle) {
-    if (vertex_best[v] == triangle) return;  // the image of a triangle next to it, measured
+    if (vertex_best[v] == triangle) return vertex_best2[v];  // the image of a triangle next to it, measured
     const double d2 = bounder.distance2(vertex_position(input, v), triangle);
     if (d2 < vertex_best2[v]) vertex_best2[v] = d2, vertex_best[v] = triangle;
+    return d2;
   };
+  std::vector<double> image_bound2(input.triangle_count(), kInfinity);
   for (std::size_t t = 0; t < input.triangle_count(); ++t)
-    if (const std::uint32_t image = image_of(t); image != kNone)
-      for (std::size_t k = 0; k < 3; ++k) offer(input.indices[3 * t + k], image);
+    if (const std::uint32_t image = image_of(t); image != kNone) {
+      double worst2 = 0.0;
+      for (std::size_t k = 0; k < 3; ++k) worst2 = std::max(worst2, offer(input.indices[3 * t + k], image));
+      image_bound2[t] = worst2;
+    }
 
   // A first total, the exact distance of the vertices whose hinted one is the largest, until
   // the next hinted one is within it: at most the true Hausdorff distance, so the total loses
@@ -234,16 +241,21 @@ double hausdorff_upper_bound(const NodeMesh& input, const NodeMesh& output, cons
   };
 
   // Every triangle's cheap bound: the best of its image and its corners' nearest triangles as
-  // the single candidate. A corner within total2 of one of the candidate's corners is not
-  // measured (it cannot raise the total); a candidate within the total settles the triangle.
-  // Where it does not, the prism pieces; triangles they do not cover wait for the closer look.
+  // the single candidate (the image's known; the others only where it does not settle the
+  // triangle). A corner within total2 of one of the candidate's corners is not measured (it
+  // cannot raise the total); a candidate within the total settles the triangle. Where it does
+  // not, the prism pieces; triangles they do not cover wait for the closer look.
   std::vector<Pending> pending;
   std::vector<std::uint32_t> unresolved;
-  std::array<std::uint32_t, 4> own;
+  std::array<std::uint32_t, 4> own, others;
   for (std::size_t t = 0; t < input.triangle_count(); ++t) {
+    if (image_bound2[t] <= total2) continue;
     const auto few = few_of(t, own);
     const Triangle p = corners(input, t);
-    const double best2 = bounder.single_bound2(p, few, total2);
+    const std::uint32_t image = image_of(t);
+    const auto others_end = std::remove_copy(few.begin(), few.end(), others.begin(), image);
+    const double best2 = std::min(
+        image_bound2[t], bounder.single_bound2(p, {others.data(), others_end}, total2));
     if (best2 == kInfinity) {
       unresolved.push_back(static_cast<std::uint32_t>(t));
       continue;
