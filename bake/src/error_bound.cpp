@@ -144,9 +144,9 @@ double hausdorff_upper_bound(const NodeMesh& input, const NodeMesh& output, cons
   const PartBounder bounder(output_corners);
 
   // Squared distances below. Every input vertex's nearest output triangle among the images of
-  // the input triangles around it: a candidate of the triangles at the vertex.
-  // On the way, every input triangle's bound against its image alone (the max of its corners'
-  // distances to it), the first of its single candidates below.
+  // the input triangles around it: a candidate of the triangles at the vertex. On the way, every
+  // input triangle's bound against its image alone (the max of its corners' distances to it),
+  // the first of its single candidates below.
   std::vector<std::uint32_t> vertex_best(input.vertex_count(), kNone);
   std::vector<double> vertex_best2(input.vertex_count(), kInfinity);
   auto offer = [&](std::uint32_t v, std::uint32_t triangle) {
@@ -254,8 +254,7 @@ double hausdorff_upper_bound(const NodeMesh& input, const NodeMesh& output, cons
     const Triangle p = corners(input, t);
     const std::uint32_t image = image_of(t);
     const auto others_end = std::remove_copy(few.begin(), few.end(), others.begin(), image);
-    const double best2 = std::min(
-        image_bound2[t], bounder.single_bound2(p, {others.data(), others_end}, total2));
+    const double best2 = std::min(image_bound2[t], bounder.single_bound2(p, {others.data(), others_end}, total2));
     if (best2 == kInfinity) {
       unresolved.push_back(static_cast<std::uint32_t>(t));
       continue;
