@@ -316,6 +316,8 @@ class LodTreeBuilder::Impl {
     // the root has no neighbours to meet: its boundary is the mesh's own border
     LodOptions lod = options_.lod;
     lod.lock_boundary = s.shape.depth > 0;
+    // every internal node's input is simplified down to the root's limit, its chain only to its own
+    lod.input_min_triangles = options_.lod.min_triangles;
     if (s.shape.depth > 0) lod.min_triangles = options_.node_min_triangles;
     Result<NodeDone> done = task.leaf ? run_leaf(task, dir, cell, lod, scratch)
                                       : run_internal(children, task.merge, dir, cell, lod);

@@ -81,8 +81,9 @@ struct LodTreeOptions {
   RootCube cube;               // the octree's root cube (node cells)
   // false: leaves get only LOD 0 (their original triangles), internal nodes no LOD.
   bool build_lods = true;
-  // Method, min_triangles (the root's), reduction, max_lods of every chain (include_input and
-  // lock_boundary are set per node).
+  // Method, min_triangles (the root's chain's, and every internal node's first step's: its
+  // input_min_triangles), reduction, max_lods of every chain (include_input, lock_boundary and
+  // input_min_triangles are set per node).
   LodOptions lod;
   // Where the chain of a node other than the root stops (its LodOptions::min_triangles). A
   // parent's LOD 0 is about as fine as its children's LOD 1, so a child's coarser LODs are only
