@@ -17,14 +17,12 @@
 #include <vector>
 
 #include "boundary_edges.h"
-#include "chain_image.h"
 #include "cluster.h"
 #include "octolod/bake/simplify.h"
 #include "octolod/measure/metro.h"
 #include "octolod/measure/triangle_bvh.h"
 #include "octolod/samplegen/sample_generator.h"
 #include "quadric.h"
-#include "simplify_step.h"
 
 namespace octolod::bake {
 namespace {
@@ -984,13 +982,12 @@ TEST(LodTest, EveryLodErrorBoundsTheMeasuredHausdorff) {
     // One step's bound is within 1.5x of the measured distance (1.07-1.14x here): each input
     // triangle is cut into the pieces that lie over one output triangle each (error_bound.cpp),
     // so the bound follows the surface's distance, not how far the input triangles reach across
-    // the output's edges (that was 8-10x, before). From LOD 2 on, a LOD is also bounded straight
-    // from LOD 0 (lod_chain.cpp), so the steps' bounds no longer add up along the chain (that
-    // was 2.0-2.4x at depth, 16x before the pieces; 1.00-1.23x here). A loose bound makes the
-    // uniform cuts of a tree uneven in their true error and the runtime draw more than its
-    // screen-space target needs (docs/benchmarks.md).
+    // the output's edges (that was 8-10x, before). Along the chain the steps' bounds add up
+    // (triangle inequality) while the measured distances do not: about 2x at depth (2.0-2.4x
+    // here; it was up to 16x). A loose bound makes the uniform cuts of a tree uneven in their true
+    // error and the runtime draw more than its screen-space target needs (docs/benchmarks.md).
     EXPECT_LE(first_ratio, 1.5) << "one step's bound is too loose";
-    EXPECT_LE(worst_ratio, 1.5) << "the chain's bounds add up again: too loose to drive the runtime's LOD choice";
+    EXPECT_LE(worst_ratio, 3.5) << "the bound is too loose to drive the runtime's LOD choice";
   }
 }
 
@@ -1032,53 +1029,6 @@ TEST(LodTest, ChainHalvesEachStepAndStopsNearMinTriangles) {
   auto capped = build_lods(rock, 0.0, rock.bounds(), options);
   ASSERT_TRUE(capped.ok());
   EXPECT_EQ(capped->size(), 2u);
-}
-
-// A chain bounds LOD k >= 2 straight from LOD 0 with the steps' images composed (chain_image.h):
-// those hints must bound as tightly as closest-point queries, and the composed image must name
-// the same vertices when a step welds identical records of its input first.
-TEST(LodTest, ComposedChainHintsBoundLikeQueries) {
-  const NodeMesh rock = make_sample(samplegen::Shape::rock, 20'000);
-  // every vertex twice, triangles alternating between the copies: the steps weld them
-  NodeMesh doubled = rock;
-  doubled.vertices.insert(doubled.vertices.end(), rock.vertices.begin(), rock.vertices.end());
-  for (std::size_t i = 0; i < doubled.indices.size(); ++i)
-    if ((i / 3) % 2 == 1) doubled.indices[i] += static_cast<std::uint32_t>(rock.vertex_count());
-  SimplifyOptions options;
-  options.target_triangles = 10'000;
-  auto rock_step = simplify_step(rock, rock.bounds(), options);
-  ASSERT_TRUE(rock_step.ok());
-  for (const NodeMesh* first : std::array<const NodeMesh*, 2>{&rock, &doubled}) {
-    options.target_triangles = 10'000;
-    auto step1 = simplify_step(*first, rock.bounds(), options);
-    ASSERT_TRUE(step1.ok());
-    options.target_triangles = 5'000;
-    auto step2 = simplify_step(step1->result.mesh, rock.bounds(), options);
-    ASSERT_TRUE(step2.ok());
-    ASSERT_TRUE(step1->has_image() && step2->has_image());
-    ASSERT_EQ(step1->vertex_cluster.size(), first->vertex_count());
-    ASSERT_EQ(step1->result.mesh, rock_step->result.mesh);  // welded, the doubled rock is the rock
-    for (std::size_t i = 0; i < rock.indices.size(); ++i) {
-      ASSERT_EQ(step1->vertex_cluster[first->indices[i]], rock_step->vertex_cluster[rock.indices[i]]) << "corner " << i;
-      ASSERT_EQ(step1->vertex_output[first->indices[i]], rock_step->vertex_output[rock.indices[i]]) << "corner " << i;
-    }
-
-    ChainImage image(*first);
-    const ImageHints once = image.follow(step1.value(), step1->result.mesh);
-    EXPECT_TRUE(std::equal(once.vertex_cluster.begin(), once.vertex_cluster.end(), step1->vertex_cluster.begin()));
-    EXPECT_TRUE(std::equal(once.nearby_output_triangle.begin(), once.nearby_output_triangle.end(),
-                           step1->nearby_output_triangle.begin()));
-    const ImageHints twice = image.follow(step2.value(), step2->result.mesh);
-    const double hinted = hausdorff_upper_bound(*first, step2->result.mesh, twice);
-    const double queried = hausdorff_upper_bound(*first, step2->result.mesh);
-    const double measured = measured_hausdorff(*first, step2->result.mesh);
-    const double summed = step1->result.error_bound + step2->result.error_bound;
-    std::printf("[ info ] LOD 0 -> 2: hinted %.5f, queried %.5f, measured %.5f, steps summed %.5f\n", hinted,
-                queried, measured, summed);
-    EXPECT_GE(hinted, measured);
-    EXPECT_LE(hinted, 1.02 * queried);
-    EXPECT_LT(hinted, summed);
-  }
 }
 
 TEST(LodTest, InternalNodeModeStartsWithASimplification) {

@@ -1,18 +1,12 @@
 // LOD chains of one octree node by sequential simplification (seed 3.5.3, 5.3.2): each LOD is
-// simplified from the previous one, and its error bound comes from the triangle inequality:
-// dist(original, LOD k) <= dist(original, LOD k-1) + dist(LOD k-1, LOD k), or, from LOD 2 on,
-// dist(original, LOD 0) + dist(LOD 0, LOD k) when that is lower (bounded with the steps' images
-// composed, chain_image.h): summed, every step's bound counts its own worst point, which the
-// next steps need not share. Internal nodes start from the merge of one LOD per child
-// (lod_tree.h: the finest that fit), for unbalanced trees too.
+// simplified from the previous one, and its error bound adds up along the chain (the triangle
+// inequality: dist(original, LOD k) <= dist(original, LOD k-1) + dist(LOD k-1, LOD k)). Internal
+// nodes start from the merge of one LOD per child (lod_tree.h: the finest that fit), for
+// unbalanced trees too.
 #include <cassert>
 #include <cmath>
-#include <optional>
 
 #include "octolod/bake/simplify.h"
-#include "chain_image.h"
-#include "error_bound.h"
-#include "simplify_step.h"
 #include "wedges.h"
 
 namespace octolod::bake {
@@ -47,9 +41,6 @@ Result<std::vector<Lod>> build_lods(NodeMesh input, double input_error, const Bo
   if (options.include_input) lods.push_back({std::move(input), error});
   // each step simplifies the last LOD (the input before the first)
   auto current = [&]() -> const NodeMesh& { return lods.empty() ? input : lods.back().mesh; };
-  // LOD 0's image along the chain, while every step has one (the grid method's)
-  std::optional<ChainImage> image;
-  if (!lods.empty()) image.emplace(lods.front().mesh);
 
   // an internal node's first step goes by its own limit (LodOptions::input_min_triangles)
   auto stop_at = [&] { return lods.empty() ? options.input_min_triangles : options.min_triangles; };
@@ -62,27 +53,13 @@ Result<std::vector<Lod>> build_lods(NodeMesh input, double input_error, const Bo
     step.method = options.method;
     step.target_triangles = static_cast<std::uint32_t>(std::max<std::size_t>(target, 1));
     step.lock_boundary = options.lock_boundary;
-    Result<SimplifyStep> simplified = simplify_step(current(), cell, step);
+    Result<SimplifyResult> simplified = simplify_node(current(), cell, step);
     if (!simplified.ok()) return simplified.status();
-    NodeMesh& mesh = simplified->result.mesh;
-    const std::size_t count = mesh.triangle_count();
+    const std::size_t count = simplified->mesh.triangle_count();
     if (count == 0 || count > accept) break;  // the locked boundary dominates
-    error += simplified->result.error_bound;
-    if (image && simplified->has_image()) {
-      const ImageHints hints = image->follow(simplified.value(), mesh);
-      // never below the LOD before: a coarser LOD never claims a smaller error
-      if (lods.size() >= 2) {
-        const double direct = lods.front().error + hausdorff_upper_bound(lods.front().mesh, mesh, hints);
-        error = std::max(lods.back().error, std::min(error, direct));
-      }
-    } else {
-      image.reset();
-    }
-    lods.push_back({std::move(mesh), error});
-    if (lods.size() == 1) {
-      input = {};  // an internal node's merged input is no LOD of its own
-      if (simplified->has_image()) image.emplace(lods.front().mesh);
-    }
+    error += simplified->error_bound;
+    lods.push_back({std::move(simplified->mesh), error});
+    if (lods.size() == 1) input = {};  // an internal node's merged input is no LOD of its own
   }
   if (lods.empty()) lods.push_back({std::move(input), error});
   return lods;

@@ -8,7 +8,6 @@
 #include "cluster.h"
 #include "error_bound.h"
 #include "octolod/bake/simplify.h"
-#include "simplify_step.h"
 #include "wedges.h"
 
 namespace octolod::bake {
@@ -70,50 +69,29 @@ PreparedNode prepare_node(const NodeMesh& mesh, const Bounds& cell, bool lock_bo
   return node;
 }
 
-Result<SimplifyStep> simplify_step(const NodeMesh& input, const Bounds& cell, const SimplifyOptions& options) {
+Result<SimplifyResult> simplify_node(const NodeMesh& input, const Bounds& cell,
+                                     const SimplifyOptions& options) {
   OCTOLOD_RETURN_IF_ERROR(check_mesh(input));
   if (cell.empty()) return usage_error("simplify_node: the node cell is empty");
   if (options.method == ClusterMethod::grid && options.target_triangles == 0 && options.grid_resolution == 0)
     return usage_error("simplify_node: the grid method needs target_triangles or grid_resolution");
-  SimplifyStep step;
-  SimplifyResult& result = step.result;
+  SimplifyResult result;
   result.mesh.layout = input.layout;
-  if (input.triangle_count() == 0) return step;
+  if (input.triangle_count() == 0) return result;
 
   const PreparedNode node =
       prepare_node(input, cell, options.lock_boundary || options.method == ClusterMethod::bade2006);
   if (options.method == ClusterMethod::bade2006) {
     result.mesh = cluster_bade2006(node);
-    result.error_bound = hausdorff_upper_bound(node.mesh(), result.mesh);
-    return step;
+  } else {
+    ClusteredMesh clustered = options.target_triangles > 0 ? cluster_for_target(node, options.target_triangles)
+                                                           : cluster_grid(node, options.grid_resolution);
+    result.mesh = std::move(clustered.mesh);
+    result.error_bound = hausdorff_upper_bound(node.mesh(), result.mesh, clustered.hints());
+    return result;
   }
-  ClusteredMesh clustered = options.target_triangles > 0 ? cluster_for_target(node, options.target_triangles)
-                                                         : cluster_grid(node, options.grid_resolution);
-  result.mesh = std::move(clustered.mesh);
-  result.error_bound = hausdorff_upper_bound(node.mesh(), result.mesh, clustered.hints());
-  step.nearby_output_triangle = std::move(clustered.nearby_output_triangle);  // the weld keeps triangles
-  step.fan_offset = std::move(clustered.fan_offset);
-  step.fan_triangle = std::move(clustered.fan_triangle);
-  if (!node.welded) {
-    step.vertex_cluster = std::move(clustered.vertex_cluster);
-    step.vertex_output = std::move(clustered.vertex_output);
-    return step;
-  }
-  step.vertex_cluster.assign(input.vertex_count(), 0);
-  step.vertex_output.assign(input.vertex_count(), kNoVertex);
-  for (std::size_t i = 0; i < input.indices.size(); ++i) {
-    const std::uint32_t welded = node.welded->indices[i];
-    step.vertex_cluster[input.indices[i]] = clustered.vertex_cluster[welded];
-    step.vertex_output[input.indices[i]] = clustered.vertex_output[welded];
-  }
-  return step;
-}
-
-Result<SimplifyResult> simplify_node(const NodeMesh& input, const Bounds& cell,
-                                     const SimplifyOptions& options) {
-  Result<SimplifyStep> step = simplify_step(input, cell, options);
-  if (!step.ok()) return step.status();
-  return std::move(step->result);
+  result.error_bound = hausdorff_upper_bound(node.mesh(), result.mesh);
+  return result;
 }
 
 }  // namespace octolod::bake

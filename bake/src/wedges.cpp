@@ -452,11 +452,11 @@ ClusteredMesh build_clustered_mesh(const NodeMesh& mesh, std::span<const std::ar
   const FoldRepair folds = remove_folded_fans(input, kept);
   for (std::uint32_t& o : output_of_candidate)
     if (o != kNoTriangle) o = folds.index[o];
-  std::vector<std::uint32_t> output_id(wedge_count, kNoVertex);
+  std::vector<std::uint32_t> output_id(wedge_count, UINT32_MAX);
   for (std::uint32_t w : kept) output_id[w] = 0;
   std::uint32_t next = 0;
   for (std::size_t w = 0; w < wedge_count; ++w) {
-    if (output_id[w] == kNoVertex) continue;
+    if (output_id[w] == UINT32_MAX) continue;
     output_id[w] = next++;
     out.vertices.insert(out.vertices.end(), wedge_record.begin() + static_cast<std::ptrdiff_t>(w * stride),
                         wedge_record.begin() + static_cast<std::ptrdiff_t>((w + 1) * stride));
@@ -466,8 +466,6 @@ ClusteredMesh build_clustered_mesh(const NodeMesh& mesh, std::span<const std::ar
   std::vector<std::uint32_t> kept_cluster(kept.size());
   for (std::size_t i = 0; i < kept.size(); ++i) kept_cluster[i] = wedge_cluster[kept[i]];
   result.vertex_cluster = cluster;
-  result.vertex_output.resize(cluster.size());
-  for (std::size_t v = 0; v < cluster.size(); ++v) result.vertex_output[v] = output_id[wedge[v]];
   result.fan_offset.assign(std::size_t{clustering.count} + 1, 0);
   for (std::uint32_t c : kept_cluster) ++result.fan_offset[c + 1];
   for (auto [c, triangle] : folds.fan_extra) ++result.fan_offset[c + 1];

@@ -70,7 +70,6 @@ void place_representative(const double* quadric, const double* mean, const Clamp
 // neighbours' triangle (folded_fans.h); neither changes the boundary mod 2. Unused vertices are
 // removed; output vertices are in (cluster, smallest vertex id of the wedge) order.
 inline constexpr std::uint32_t kNoTriangle = 0xFFFFFFFFu;
-inline constexpr std::uint32_t kNoVertex = 0xFFFFFFFFu;
 struct ClusteredMesh {
   NodeMesh mesh;
   // Per input triangle: an output triangle at or next to its image (the image itself when it
@@ -85,9 +84,6 @@ struct ClusteredMesh {
   std::vector<std::uint32_t> vertex_cluster;
   std::vector<std::uint32_t> fan_offset;
   std::vector<std::uint32_t> fan_triangle;
-  // Per input vertex: the output vertex of its wedge, kNoVertex when no output triangle uses it
-  // (the wedge's triangles all collapsed): where a chain follows its first LOD's vertices.
-  std::vector<std::uint32_t> vertex_output;
 
   ImageHints hints() const { return {nearby_output_triangle, vertex_cluster, fan_offset, fan_triangle}; }
 };

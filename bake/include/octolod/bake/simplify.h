@@ -121,9 +121,7 @@ struct LodOptions {
 struct Lod {
   NodeMesh mesh;
   // Conservative geometric error of this LOD relative to the ORIGINAL surface, model units:
-  // input_error + the sum of the error bounds of the steps that led here (triangle inequality),
-  // or, from LOD 2 on, LOD 0's error + a bound of LOD 0's distance to this LOD when that is
-  // lower (grid chains); never below the previous LOD's error.
+  // input_error + the sum of the error bounds of the steps that led here (triangle inequality).
   double error = 0.0;
 };
 
