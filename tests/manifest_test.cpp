@@ -113,6 +113,70 @@ TEST(Manifest, RejectsABadNodeByIndexAndNonObjectNodes) {
   EXPECT_EQ(r.status().code(), ErrorCode::bad_input);
 }
 
+// The reader takes the nodes from the parser's events (manifest_sax.h): members the format does
+// not define are skipped at every level, whatever their value.
+TEST(Manifest, SkipsMembersTheFormatDoesNotDefine) {
+  const Manifest m = small_manifest();
+  std::string text = manifest_to_json(m);
+  auto insert_after = [&](const std::string& what, const std::string& extra) {
+    const std::size_t at = text.find(what);
+    ASSERT_NE(at, std::string::npos) << what;
+    text.insert(at + what.size(), extra);
+  };
+  insert_after("\"source_triangles\": 0", ", \"extra\": {\"a\": [1, {\"b\": [2]}], \"lods\": 3}");
+  insert_after("\"file\": \"0/lod0.olod\"", ", \"more\": [[1], {\"file\": 2}], \"note\": null");
+  insert_after("\"cell\": {", "\"center\": [0, [1], {\"min\": 2}], ");
+  Result<Manifest> back = manifest_from_json(text, "extra.json");
+  ASSERT_TRUE(back.ok()) << back.status().message();
+  EXPECT_EQ(manifest_to_json(back.value()), manifest_to_json(m));
+}
+
+// A member of the wrong kind or range, or missing, fails the manifest naming the node and the
+// member; a bad node does not hide that the manifest is of a newer version.
+TEST(Manifest, NamesTheNodeAndMemberThatCannotBeRead) {
+  const std::string text = manifest_to_json(small_manifest());
+  const std::size_t nodes = text.find("\"nodes\"");
+  const std::size_t node1_bounds = text.find("\"bounds\"", text.find("\"bounds\"", nodes) + 1);
+  const std::size_t node1_children = text.find("\"children\": [", text.find("\"child_mask\": 0"));
+  struct Case {
+    std::size_t at;
+    std::string from, to, message;
+  };
+  const std::vector<Case> cases{
+      {0, "\"path\": \"0\"", "\"path\": 0", "node 1: \"path\" is not a string"},
+      {0, "\"depth\": 1", "\"depth\": -1", "node 1: \"depth\" is not an integer in range"},
+      {0, "\"file\": \"0/lod0.olod\"", "\"file\": 5", "node 1: \"file\" is not a string"},
+      {0, "\"file\": \"0/lod0.olod\"", "\"fil\": \"0/lod0.olod\"", "node 1: lod 0: no \"file\""},
+      {0, "\"error\": 0.0", "\"error\": \"x\"", "node 1: \"error\" is not a number"},
+      {0, "\"error\": 0.0", "\"error\": [0.0]", "node 1: \"error\" is not a scalar"},
+      {0, "\"source_triangles\": 0", "\"source_triangles\": 0.5", "node 1: \"source_triangles\" is not an integer"},
+      {node1_children, "[", "[-1, ", "node 1: \"children\" has more than 8 elements"},
+      {node1_bounds, "\"min\": [", "\"min\": [\"x\", ", "node 1: \"bounds.min\" holds a value that is not a number"},
+      {node1_bounds, "\"bounds\": {", "\"bounds\": [{", "node 1: \"bounds\" is not an object"},
+  };
+  for (const Case& c : cases) {
+    std::string bad = text;
+    const std::size_t at = bad.find(c.from, c.at);
+    ASSERT_NE(at, std::string::npos) << c.from;
+    bad.replace(at, c.from.size(), c.to);
+    if (c.to.find("[{") != std::string::npos) {  // close the array it opens: keep the JSON well formed
+      const std::size_t close = bad.find('}', at + c.to.size());
+      bad.insert(close + 1, "]");
+    }
+    Result<Manifest> r = manifest_from_json(bad, "bad.json");
+    ASSERT_FALSE(r.ok()) << c.to;
+    EXPECT_EQ(r.status().code(), ErrorCode::bad_input) << c.to;
+    EXPECT_NE(r.status().message().find("bad.json: invalid manifest: " + c.message), std::string::npos)
+        << r.status().message();
+    bad.replace(bad.find("\"version\": 1"), 12, "\"version\": 2");
+    EXPECT_EQ(manifest_from_json(bad, "v2.json").status().code(), ErrorCode::unsupported) << c.to;
+  }
+  Result<Manifest> cut = manifest_from_json(text.substr(0, 200), "cut.json");
+  ASSERT_FALSE(cut.ok());
+  EXPECT_NE(cut.status().message().find("cut.json: not valid JSON"), std::string::npos) << cut.status().message();
+  EXPECT_NE(cut.status().message().find("column"), std::string::npos) << cut.status().message();
+}
+
 TEST(Manifest, NewerVersionIsUnsupported) {
   std::string text = manifest_to_json(small_manifest());
   text.replace(text.find("\"version\": 1"), 12, "\"version\": 7");

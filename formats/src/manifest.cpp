@@ -12,6 +12,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "manifest_sax.h"
+
 namespace octolod {
 namespace {
 
@@ -194,48 +196,15 @@ std::string manifest_to_json(const Manifest& m) {
 
 namespace {
 
-// One element of "nodes"; missing keys and wrong types throw json::exception.
-NodeInfo node_from_json(const json& jn) {
-  NodeInfo n;
-  n.path = jn.at("path").get<std::string>();
-  n.depth = jn.at("depth").get<std::uint32_t>();
-  n.parent = jn.at("parent").get<std::int32_t>();
-  n.children = jn.at("children").get<std::array<std::int32_t, 8>>();
-  n.cell = bounds_from_json(jn.at("cell"));
-  n.bounds = bounds_from_json(jn.at("bounds"));
-  n.source_triangles = jn.at("source_triangles").get<std::uint64_t>();
-  const json& lods = jn.at("lods");
-  n.lods.reserve(lods.size());  // no spare capacity: a large tree holds 542K of them
-  for (const json& jl : lods)
-    n.lods.push_back(LodInfo{jl.at("triangles").get<std::uint32_t>(), jl.at("vertices").get<std::uint32_t>(),
-                             jl.at("error").get<double>(), jl.at("bytes").get<std::uint64_t>(),
-                             jl.at("file").get<std::string>()});
-  return n;
-}
-
-// The manifest from the document `parse(callback)` returns (json::parse of a text or a stream
-// with that callback, without exceptions).
+// The manifest from `parse(sax)` (json::sax_parse of a text or a stream into that handler).
 template <class Parse>
 Result<Manifest> manifest_from_parser(const Parse& parse, std::string_view name) {
-  // The nodes are converted as the parser finishes each one and dropped from the document: a
-  // whole document of a large tree (212K nodes for 100M triangles, a 220 MB file) took about 6x
-  // its text in memory, the converted nodes take about half of it.
   Manifest m;
-  std::string node_error;  // the first node that failed to convert
-  std::string top_key;     // the top-level key being parsed
-  const json::parser_callback_t take_nodes = [&](int depth, json::parse_event_t event, json& parsed) {
-    if (event == json::parse_event_t::key && depth == 1) top_key = parsed.get<std::string>();
-    if (event != json::parse_event_t::object_end || depth != 2 || top_key != "nodes") return true;
-    if (!node_error.empty()) return false;
-    try {
-      m.nodes.push_back(node_from_json(parsed));
-    } catch (const json::exception& e) {
-      node_error = "node " + std::to_string(m.nodes.size()) + ": " + e.what();
-    }
-    return false;
-  };
-  json doc = parse(take_nodes);
-  if (doc.is_discarded()) return bad_input_error(std::string(name) + ": not valid JSON");
+  ManifestSax sax(m.nodes);
+  parse(sax);
+  if (!sax.syntax_error().empty())
+    return bad_input_error(std::string(name) + ": not valid JSON: " + sax.syntax_error());
+  const json& doc = sax.document();
   try {
     if (doc.at("format").get<std::string>() != "octolod-manifest")
       return invalid(name, "\"format\" is not \"octolod-manifest\"");
@@ -244,7 +213,7 @@ Result<Manifest> manifest_from_parser(const Parse& parse, std::string_view name)
       return Status(ErrorCode::unsupported, std::string(name) + ": manifest version " +
                                                 std::to_string(m.version) + ", this build reads " +
                                                 std::to_string(kManifestVersion));
-    if (!node_error.empty()) return invalid(name, node_error);
+    if (!sax.node_error().empty()) return invalid(name, sax.node_error());
     const json& layout = doc.at("layout");
     m.layout = VertexLayout{layout.at("normal").get<bool>(), layout.at("color").get<bool>(),
                             layout.at("uv").get<bool>()};
@@ -260,10 +229,7 @@ Result<Manifest> manifest_from_parser(const Parse& parse, std::string_view name)
                                   p.at("method").get<std::string>()};
     m.stage_seconds = doc.at("stage_seconds").get<std::map<std::string, double>>();
     m.stats = doc.at("stats").get<std::map<std::string, double>>();
-    // every object of "nodes" was taken by the callback; anything left is not a node
-    const json& nodes = doc.at("nodes");
-    if (!nodes.is_array()) return invalid(name, "\"nodes\" is not an array");
-    if (!nodes.empty()) return invalid(name, "\"nodes\" holds a value that is not an object");
+    if (!doc.at("nodes").is_array()) return invalid(name, "\"nodes\" is not an array");
   } catch (const json::exception& e) {
     // nlohmann reports missing keys and type mismatches by exception; convert at this boundary.
     return invalid(name, e.what());
@@ -275,11 +241,7 @@ Result<Manifest> manifest_from_parser(const Parse& parse, std::string_view name)
 }  // namespace
 
 Result<Manifest> manifest_from_json(std::string_view text, std::string_view name) {
-  return manifest_from_parser(
-      [&](const json::parser_callback_t& callback) {
-        return json::parse(text.begin(), text.end(), callback, /*allow_exceptions=*/false);
-      },
-      name);
+  return manifest_from_parser([&](ManifestSax& sax) { json::sax_parse(text.begin(), text.end(), &sax); }, name);
 }
 
 Status write_manifest(const std::filesystem::path& path, const Manifest& manifest) {
@@ -324,9 +286,8 @@ Result<Manifest> read_manifest(const std::filesystem::path& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) return io_error(path.string() + ": cannot open: " + std::strerror(errno));
   // parsed from the stream: a large tree's text is never held whole (220 MB for 100M triangles)
-  Result<Manifest> manifest = manifest_from_parser(
-      [&](const json::parser_callback_t& callback) { return json::parse(in, callback, /*allow_exceptions=*/false); },
-      path.string());
+  Result<Manifest> manifest =
+      manifest_from_parser([&](ManifestSax& sax) { json::sax_parse(in, &sax); }, path.string());
   if (in.bad()) return io_error(path.string() + ": read failed");
   return manifest;
 }
