@@ -6,9 +6,9 @@
 
 namespace octolod::runtime {
 
-LoadQueue::LoadQueue(std::shared_ptr<const NodeSource> source, std::vector<std::string> files,
-                     VertexLayout layout)
-    : source_(std::move(source)), files_(std::move(files)), layout_(layout) {}
+LoadQueue::LoadQueue(std::shared_ptr<const NodeSource> source, std::shared_ptr<const Manifest> manifest,
+                     std::vector<const std::string*> files, VertexLayout layout)
+    : source_(std::move(source)), manifest_(std::move(manifest)), files_(std::move(files)), layout_(layout) {}
 
 void LoadQueue::take_pending(std::vector<std::uint32_t>& out) {
   out.clear();
@@ -65,7 +65,7 @@ void LoadQueue::run_task() {
 LoadCompletion LoadQueue::load(std::uint32_t slot) const {
   LoadCompletion done;
   done.slot = slot;
-  const std::string& file = files_[slot];
+  const std::string& file = *files_[slot];
   Result<std::vector<std::byte>> bytes = source_->read(file);
   if (!bytes.ok()) {
     done.status = bytes.status();

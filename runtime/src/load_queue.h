@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "octolod/formats/manifest.h"
 #include "octolod/formats/node_file.h"
 #include "octolod/formats/status.h"
 #include "octolod/runtime/node_source.h"
@@ -29,9 +30,10 @@ struct LoadCompletion {
 
 class LoadQueue {
  public:
-  // `files[slot]` is the file of each slot; `layout` the layout every node file must have.
-  LoadQueue(std::shared_ptr<const NodeSource> source, std::vector<std::string> files,
-            VertexLayout layout);
+  // `*files[slot]` is the file of each slot, a name held by `manifest` (which the queue keeps
+  // alive for its tasks); `layout` the layout every node file must have.
+  LoadQueue(std::shared_ptr<const NodeSource> source, std::shared_ptr<const Manifest> manifest,
+            std::vector<const std::string*> files, VertexLayout layout);
 
   // Render thread. take_pending() removes every request not yet started (into `out`, replacing
   // its content); set_pending() publishes `in` (most important last) and leaves `in` empty.
@@ -52,7 +54,8 @@ class LoadQueue {
   LoadCompletion load(std::uint32_t slot) const;
 
   const std::shared_ptr<const NodeSource> source_;
-  const std::vector<std::string> files_;
+  const std::shared_ptr<const Manifest> manifest_;
+  const std::vector<const std::string*> files_;
   const VertexLayout layout_;
 
   std::mutex mutex_;

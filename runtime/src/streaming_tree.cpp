@@ -65,12 +65,13 @@ struct StreamingTree::Impl {
     std::uint32_t slot;
   };
 
-  Impl(Manifest m, TreeLayout t, std::shared_ptr<const NodeSource> source,
+  // `t` was built from `*m`.
+  Impl(std::shared_ptr<const Manifest> m, TreeLayout t, std::shared_ptr<const NodeSource> source,
        std::shared_ptr<Executor> exec, StreamingOptions o)
       : manifest(std::move(m)), options(std::move(o)), tree(std::move(t)),
         cache(tree, options.max_resident_bytes),
-        loads(std::make_shared<LoadQueue>(std::move(source), std::move(tree.slot_file),
-                                          manifest.layout)),
+        loads(std::make_shared<LoadQueue>(std::move(source), manifest, std::move(tree.slot_file),
+                                          manifest->layout)),
         executor(std::move(exec)),
         root_slot(tree.nodes[0].lod_count > 0 ? tree.slot_end(0) - 1 : kNoSlot),
         candidate_mark(tree.slot_error.size(), 0), drawn_mark(tree.slot_error.size(), 0),
@@ -116,7 +117,7 @@ struct StreamingTree::Impl {
     return lod < n.lod_count ? n.lod_begin + lod : kNoSlot;
   }
 
-  Manifest manifest;
+  std::shared_ptr<const Manifest> manifest;  // shared with the load queue (its file names)
   StreamingOptions options;
   TreeLayout tree;
   NodeCache cache;
@@ -257,7 +258,7 @@ void StreamingTree::Impl::install_completions(FrameStats& stats) {
 void StreamingTree::Impl::log_failure(std::uint32_t slot, const Status& status) const {
   if (!options.log) return;
   const LayoutNode& n = tree.nodes[tree.slot_node[slot]];
-  const std::string& path = manifest.nodes[n.manifest_index].path;
+  const std::string& path = manifest->nodes[n.manifest_index].path;
   options.log("node '" + (path.empty() ? std::string("(root)") : path) + "' LOD " +
               std::to_string(slot - n.lod_begin) + " failed to load, drawing a fallback from now " +
               "on: " + status.message());
@@ -528,7 +529,8 @@ Result<std::unique_ptr<StreamingTree>> StreamingTree::open(Manifest manifest,
   if (!source) return usage_error("StreamingTree::open needs a NodeSource");
   if (!executor) return usage_error("StreamingTree::open needs an Executor");
   OCTOLOD_RETURN_IF_ERROR(validate(options));
-  Result<TreeLayout> tree = build_tree_layout(manifest);
+  auto shared = std::make_shared<const Manifest>(std::move(manifest));
+  Result<TreeLayout> tree = build_tree_layout(*shared);
   if (!tree.ok()) return tree.status();
   const LayoutNode& root = tree->nodes[0];
   if (root.lod_count > 0) {
@@ -538,7 +540,7 @@ Result<std::unique_ptr<StreamingTree>> StreamingTree::open(Manifest manifest,
                          ") cannot hold the root's coarsest LOD (" + std::to_string(root_bytes) +
                          " bytes)");
   }
-  auto impl = std::make_unique<Impl>(std::move(manifest), std::move(tree).value(), std::move(source),
+  auto impl = std::make_unique<Impl>(std::move(shared), std::move(tree).value(), std::move(source),
                                      std::move(executor), std::move(options));
   return std::unique_ptr<StreamingTree>(new StreamingTree(std::move(impl)));
 }
@@ -552,7 +554,7 @@ Result<std::unique_ptr<StreamingTree>> StreamingTree::open_directory(
 }
 
 const FrameResult& StreamingTree::update(const Camera& camera) { return impl_->update(camera); }
-const Manifest& StreamingTree::manifest() const { return impl_->manifest; }
+const Manifest& StreamingTree::manifest() const { return *impl_->manifest; }
 const StreamingOptions& StreamingTree::options() const { return impl_->options; }
 
 bool StreamingTree::is_resident(std::uint32_t node, std::uint32_t lod) const {
