@@ -153,6 +153,7 @@ TEST(Manifest, NamesTheNodeAndMemberThatCannotBeRead) {
       {node1_children, "[", "[-1, ", "node 1: \"children\" has more than 8 elements"},
       {node1_bounds, "\"min\": [", "\"min\": [\"x\", ", "node 1: \"bounds.min\" holds a value that is not a number"},
       {node1_bounds, "\"bounds\": {", "\"bounds\": [{", "node 1: \"bounds\" is not an object"},
+      {node1_bounds, "\"min\": [", "\"min\": [1e39, ", "node 1: \"bounds.min\" holds a number beyond the float range"},
   };
   for (const Case& c : cases) {
     std::string bad = text;
@@ -171,6 +172,11 @@ TEST(Manifest, NamesTheNodeAndMemberThatCannotBeRead) {
     bad.replace(bad.find("\"version\": 1"), 12, "\"version\": 2");
     EXPECT_EQ(manifest_from_json(bad, "v2.json").status().code(), ErrorCode::unsupported) << c.to;
   }
+  std::string huge = text;  // the model's bounds, read from the document rather than the events
+  huge.replace(huge.find("\"min\": [", huge.find("\"bounds\"")), 8, "\"min\": [-1e39, ");
+  Result<Manifest> r = manifest_from_json(huge, "huge.json");
+  ASSERT_FALSE(r.ok());
+  EXPECT_NE(r.status().message().find("beyond the float range"), std::string::npos) << r.status().message();
   Result<Manifest> cut = manifest_from_json(text.substr(0, 200), "cut.json");
   ASSERT_FALSE(cut.ok());
   EXPECT_NE(cut.status().message().find("cut.json: not valid JSON"), std::string::npos) << cut.status().message();

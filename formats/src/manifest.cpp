@@ -3,6 +3,8 @@
 
 #include <cassert>
 #include <cerrno>
+#include <cmath>
+#include <limits>
 #include <cstdio>
 #include <cstring>
 #include <fstream>
@@ -21,10 +23,21 @@ using nlohmann::json;
 
 json bounds_to_json(const Bounds& b) { return json{{"min", b.min}, {"max", b.max}}; }
 
+// Missing keys, wrong types and numbers beyond the float range throw json::exception.
 Bounds bounds_from_json(const json& j) {
+  const auto corner = [&](const char* key) {
+    const auto d = j.at(key).get<std::array<double, 3>>();
+    std::array<float, 3> f;
+    for (std::size_t i = 0; i < 3; ++i) {
+      if (!(std::fabs(d[i]) <= std::numeric_limits<float>::max()))  // a float cast beyond it is UB
+        throw json::out_of_range::create(406, std::string("\"") + key + "\" holds a number beyond the float range", &j);
+      f[i] = static_cast<float>(d[i]);
+    }
+    return f;
+  };
   Bounds b;
-  b.min = j.at("min").get<std::array<float, 3>>();
-  b.max = j.at("max").get<std::array<float, 3>>();
+  b.min = corner("min");
+  b.max = corner("max");
   return b;
 }
 
