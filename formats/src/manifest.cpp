@@ -4,11 +4,11 @@
 #include <cassert>
 #include <cerrno>
 #include <cmath>
-#include <limits>
 #include <cstdio>
 #include <cstring>
 #include <fstream>
 #include <functional>
+#include <limits>
 #include <string_view>
 #include <unistd.h>
 
@@ -298,7 +298,7 @@ Result<Manifest> read_tree_manifest(const std::filesystem::path& tree_root) {
 Result<Manifest> read_manifest(const std::filesystem::path& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) return io_error(path.string() + ": cannot open: " + std::strerror(errno));
-  // parsed from the stream: a large tree's text is never held whole (220 MB for 100M triangles)
+  // parsed from the stream: a large tree's text is never held whole (180 MB for 100M triangles)
   Result<Manifest> manifest =
       manifest_from_parser([&](ManifestSax& sax) { json::sax_parse(in, &sax); }, path.string());
   if (in.bad()) return io_error(path.string() + ": read failed");
