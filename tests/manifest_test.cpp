@@ -172,6 +172,18 @@ TEST(Manifest, NamesTheNodeAndMemberThatCannotBeRead) {
     bad.replace(bad.find("\"version\": 1"), 12, "\"version\": 2");
     EXPECT_EQ(manifest_from_json(bad, "v2.json").status().code(), ErrorCode::unsupported) << c.to;
   }
+  // the header's integers: a float or a number out of range is refused, never cast (undefined
+  // behaviour beyond the type's range; found by manifest_reader_fuzz)
+  for (const auto& [from, to] : {std::pair<std::string, std::string>{"\"threads\": 2", "\"threads\": 2e68"},
+                                 {"\"max_tris\": 2000", "\"max_tris\": 99999999999"},
+                                 {"\"version\": 1", "\"version\": 1.5"}}) {
+    std::string bad = text;
+    bad.replace(bad.find(from), from.size(), to);
+    Result<Manifest> r = manifest_from_json(bad, "header.json");
+    ASSERT_FALSE(r.ok()) << to;
+    EXPECT_EQ(r.status().code(), ErrorCode::bad_input) << to;
+    EXPECT_NE(r.status().message().find("is not an integer in range"), std::string::npos) << r.status().message();
+  }
   std::string huge = text;  // the model's bounds, read from the document rather than the events
   huge.replace(huge.find("\"min\": [", huge.find("\"bounds\"")), 8, "\"min\": [-1e39, ");
   Result<Manifest> r = manifest_from_json(huge, "huge.json");

@@ -23,6 +23,19 @@ using nlohmann::json;
 
 json bounds_to_json(const Bounds& b) { return json{{"min", b.min}, {"max", b.max}}; }
 
+// j[key] as an integer of type T; json::exception when it is missing, not an integer or out of
+// T's range.
+template <class T>
+T integer_at(const json& j, const char* key) {
+  const json& v = j.at(key);
+  T out{};
+  const bool is_unsigned = v.is_number_unsigned(), is_signed = v.is_number_integer() && !is_unsigned;
+  if (!integer_in_range(is_signed ? v.get<std::int64_t>() : 0, is_unsigned ? v.get<std::uint64_t>() : 0, is_signed,
+                        is_unsigned, out))
+    throw json::type_error::create(302, std::string("\"") + key + "\" is not an integer in range", &v);
+  return out;
+}
+
 // Missing keys, wrong types and numbers beyond the float range throw json::exception.
 Bounds bounds_from_json(const json& j) {
   const auto corner = [&](const char* key) {
@@ -221,7 +234,7 @@ Result<Manifest> manifest_from_parser(const Parse& parse, std::string_view name)
   try {
     if (doc.at("format").get<std::string>() != "octolod-manifest")
       return invalid(name, "\"format\" is not \"octolod-manifest\"");
-    m.version = doc.at("version").get<std::uint32_t>();
+    m.version = integer_at<std::uint32_t>(doc, "version");
     if (m.version != kManifestVersion)
       return Status(ErrorCode::unsupported, std::string(name) + ": manifest version " +
                                                 std::to_string(m.version) + ", this build reads " +
@@ -231,14 +244,14 @@ Result<Manifest> manifest_from_parser(const Parse& parse, std::string_view name)
     m.layout = VertexLayout{layout.at("normal").get<bool>(), layout.at("color").get<bool>(),
                             layout.at("uv").get<bool>()};
     m.bounds = bounds_from_json(doc.at("bounds"));
-    m.input_vertices = doc.at("input_vertices").get<std::uint64_t>();
-    m.input_triangles = doc.at("input_triangles").get<std::uint64_t>();
+    m.input_vertices = integer_at<std::uint64_t>(doc, "input_vertices");
+    m.input_triangles = integer_at<std::uint64_t>(doc, "input_triangles");
     const json& p = doc.at("parameters");
     m.parameters = BakeParameters{p.at("input").get<std::string>(),
-                                  p.at("max_tris").get<std::uint32_t>(),
-                                  p.at("max_depth").get<std::uint32_t>(),
-                                  p.at("memory_budget_bytes").get<std::uint64_t>(),
-                                  p.at("threads").get<std::uint32_t>(),
+                                  integer_at<std::uint32_t>(p, "max_tris"),
+                                  integer_at<std::uint32_t>(p, "max_depth"),
+                                  integer_at<std::uint64_t>(p, "memory_budget_bytes"),
+                                  integer_at<std::uint32_t>(p, "threads"),
                                   p.at("method").get<std::string>()};
     m.stage_seconds = doc.at("stage_seconds").get<std::map<std::string, double>>();
     m.stats = doc.at("stats").get<std::map<std::string, double>>();

@@ -218,22 +218,6 @@ std::string_view name_of(Key key) {
 
 std::string quoted(Key key) { return "\"" + std::string(name_of(key)) + "\""; }
 
-// The scalar as a T, or false when it is no integer or out of T's range.
-template <class T>
-bool as_integer(std::int64_t integer, std::uint64_t unsigned_integer, bool is_signed, bool is_unsigned, T& out) {
-  if (is_unsigned && unsigned_integer <= static_cast<std::uint64_t>(std::numeric_limits<T>::max())) {
-    out = static_cast<T>(unsigned_integer);
-    return true;
-  }
-  if (is_signed && std::numeric_limits<T>::is_signed &&
-      integer >= static_cast<std::int64_t>(std::numeric_limits<T>::min()) &&
-      integer <= static_cast<std::int64_t>(std::numeric_limits<T>::max())) {
-    out = static_cast<T>(integer);
-    return true;
-  }
-  return false;
-}
-
 }  // namespace
 
 void ManifestSax::start_node() {
@@ -272,7 +256,7 @@ void ManifestSax::node_scalar(const Scalar& value) {
   const double number = is_signed ? static_cast<double>(value.integer)
                                   : is_unsigned ? static_cast<double>(value.unsigned_integer) : value.floating;
   auto integer = [&](auto& out, Key key) {
-    if (!as_integer(value.integer, value.unsigned_integer, is_signed, is_unsigned, out))
+    if (!integer_in_range(value.integer, value.unsigned_integer, is_signed, is_unsigned, out))
       fail(quoted(key) + " is not an integer in range");
   };
   const Key member = node_key_[1];

@@ -6,6 +6,7 @@
 #pragma once
 
 #include <cstdint>
+#include <limits>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -15,6 +16,24 @@
 #include "octolod/formats/manifest.h"
 
 namespace octolod {
+
+// A JSON integer (a signed or an unsigned one, as the parser reports it) as a T: false when it
+// is neither or out of T's range. nlohmann's get<T>() casts whatever number it holds, which is
+// undefined behaviour beyond T's range (a float such as 2e68 included).
+template <class T>
+bool integer_in_range(std::int64_t integer, std::uint64_t unsigned_integer, bool is_signed, bool is_unsigned, T& out) {
+  if (is_unsigned && unsigned_integer <= static_cast<std::uint64_t>(std::numeric_limits<T>::max())) {
+    out = static_cast<T>(unsigned_integer);
+    return true;
+  }
+  if (is_signed && std::numeric_limits<T>::is_signed &&
+      integer >= static_cast<std::int64_t>(std::numeric_limits<T>::min()) &&
+      integer <= static_cast<std::int64_t>(std::numeric_limits<T>::max())) {
+    out = static_cast<T>(integer);
+    return true;
+  }
+  return false;
+}
 
 class ManifestSax : public nlohmann::json_sax<nlohmann::json> {
  public:
