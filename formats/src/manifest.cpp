@@ -3,12 +3,10 @@
 
 #include <cassert>
 #include <cerrno>
-#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <fstream>
 #include <functional>
-#include <limits>
 #include <string_view>
 #include <unistd.h>
 
@@ -42,7 +40,7 @@ Bounds bounds_from_json(const json& j) {
     const auto d = j.at(key).get<std::array<double, 3>>();
     std::array<float, 3> f;
     for (std::size_t i = 0; i < 3; ++i) {
-      if (!(std::fabs(d[i]) <= std::numeric_limits<float>::max()))  // a float cast beyond it is UB
+      if (!within_float_range(d[i]))
         throw json::out_of_range::create(406, std::string("\"") + key + "\" holds a number beyond the float range", &j);
       f[i] = static_cast<float>(d[i]);
     }

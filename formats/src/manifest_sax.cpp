@@ -1,8 +1,6 @@
 // ManifestSax, see manifest_sax.h.
 #include "manifest_sax.h"
 
-#include <cmath>
-#include <limits>
 #include <string_view>
 #include <utility>
 
@@ -304,7 +302,7 @@ void ManifestSax::node_scalar(const Scalar& value) {
   if (member == Key::cell || member == Key::bounds) {
     if (!is_number) return fail(box_member() + " holds a value that is not a number");
     if (node_index_[3] >= 3) return fail(box_member() + " has more than 3 elements");
-    if (!(std::fabs(number) <= std::numeric_limits<float>::max()))  // a float cast beyond it is UB
+    if (!within_float_range(number))
       return fail(box_member() + " holds a number beyond the float range");
     Bounds& box = member == Key::cell ? node_.cell : node_.bounds;
     (node_key_[2] == Key::min ? box.min : box.max)[node_index_[3]++] = static_cast<float>(number);

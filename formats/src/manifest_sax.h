@@ -5,6 +5,7 @@
 // objects are maps of strings) was most of the time of opening a tree.
 #pragma once
 
+#include <cmath>
 #include <cstdint>
 #include <limits>
 #include <string>
@@ -35,6 +36,9 @@ bool integer_in_range(std::int64_t integer, std::uint64_t unsigned_integer, bool
   return false;
 }
 
+// Whether a number converts to float: a float cast beyond the float range is undefined behaviour.
+inline bool within_float_range(double x) { return std::fabs(x) <= std::numeric_limits<float>::max(); }
+
 class ManifestSax : public nlohmann::json_sax<nlohmann::json> {
  public:
   // The keys of a node's members, of "cell" / "bounds" and of a LOD; other for any other key.
@@ -49,7 +53,7 @@ class ManifestSax : public nlohmann::json_sax<nlohmann::json> {
   // After the parse: the document without its nodes (null when it was not an object), the
   // first node that could not be read ("node 3: ..."; empty when none), and the parser's
   // message when the text is not JSON (empty when it is).
-  nlohmann::json& document() { return document_; }
+  const nlohmann::json& document() const { return document_; }
   const std::string& node_error() const { return node_error_; }
   const std::string& syntax_error() const { return syntax_error_; }
 
