@@ -460,6 +460,31 @@ TEST(BoundaryTest, FindsEdgesUsedOnceKeyedOnPositions) {
   EXPECT_EQ(open.locked_position, (std::vector<std::uint8_t>{1, 0, 1, 1}));
 }
 
+TEST(SimplifyTest, AFreeBorderIsSimplifiedWithoutEroding) {
+  // A node that keeps no boundary (the root) clusters its border like the interior; the border
+  // quadrics (add_plane_quadrics) hold the border clusters on the border: the flat square's
+  // simplification keeps its outline and area while its border edges become few. Without them
+  // the border clusters' representatives sit at their means, half a cell inside.
+  const NodeMesh input = plane_grid(32);
+  SimplifyOptions options = grid_target(200);
+  options.lock_boundary = false;
+  const SimplifyResult result = simplify(input, input.bounds(), options);
+  ASSERT_GT(result.mesh.triangle_count(), 0u);
+  EXPECT_LE(result.mesh.triangle_count(), 200u);
+  const std::set<EdgeKey> border = odd_edges(result.mesh);
+  EXPECT_LT(border.size(), 4u * 32u / 2) << "the border was not simplified";
+  double area = 0;
+  for (const auto& n : face_normals(result.mesh)) area += 0.5 * std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+  EXPECT_NEAR(area, 1.0, 1e-4);
+  for (const EdgeKey& edge : border)
+    for (const PositionKey& p : edge) {
+      const float x = std::bit_cast<float>(p[0]), y = std::bit_cast<float>(p[1]);
+      const float off = std::min({std::abs(x), std::abs(1 - x), std::abs(y), std::abs(1 - y)});
+      EXPECT_LT(off, 1e-5f) << "a border vertex at (" << x << ", " << y << ") left the outline";
+    }
+  EXPECT_LT(result.error_bound, 1e-4);
+}
+
 TEST(SimplifyTest, BoundaryVerticesAndEdgesSurviveBitIdentical) {
   const NodeMesh input = plane_grid(32);
   const SimplifyResult result = simplify(input, input.bounds(), grid_target(300));

@@ -74,7 +74,7 @@ Boundary find_boundary(const NodeMesh& mesh, const PositionIds& positions) {
   boundary.edges.reserve(first_corners.size());
   for (const std::uint32_t c : first_corners) {
     const std::uint32_t next = c % 3 == 2 ? c - 2 : c + 1;
-    const BoundaryEdge edge{mesh.indices[c], mesh.indices[next]};
+    const BoundaryEdge edge{mesh.indices[c], mesh.indices[next], c / 3};
     boundary.edges.push_back(edge);
     boundary.locked_position[positions.of_vertex[edge.a]] = 1;
     boundary.locked_position[positions.of_vertex[edge.b]] = 1;

@@ -32,6 +32,7 @@ PositionIds make_position_ids(const NodeMesh& mesh);
 struct BoundaryEdge {
   std::uint32_t a;
   std::uint32_t b;
+  std::uint32_t triangle;  // that triangle
 };
 
 struct Boundary {

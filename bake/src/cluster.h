@@ -25,7 +25,11 @@ struct PreparedNode {
   const NodeMesh* input = nullptr;  // not owned: outlives the PreparedNode
   std::optional<NodeMesh> welded;
   PositionIds positions;
-  Boundary boundary;
+  Boundary boundary;  // empty (nothing locked) without lock_boundary
+  // Without lock_boundary: the boundary edges (find_boundary), clustered like the interior, each
+  // adding a border quadric (add_plane_quadrics) so that the border keeps its place. Empty with
+  // it.
+  std::vector<BoundaryEdge> free_border;
   Bounds cell;                    // the node's octree cell, model units
   Bounds mesh_bounds;             // tight bounds of mesh
   // triangle_normal of every triangle of mesh (twice its area), and the mesh's area: the

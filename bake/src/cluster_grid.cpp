@@ -204,7 +204,8 @@ std::vector<std::uint32_t> clusters_by_error(const PreparedNode& node, const std
   for (std::size_t v = 0; v < cluster.size(); ++v) unlocked[v] = (distinct[cluster[v]] & kLockedKey) == 0;
   constexpr std::size_t q3 = quadric_doubles(3);
   std::vector<double> quadric(count * q3, 0.0), area(count, 0.0), sum(count * 3, 0.0);
-  add_plane_quadrics(node.mesh(), node.face_normal, cluster, unlocked, node.origin, quadric.data(), area.data());
+  add_plane_quadrics(node.mesh(), node.face_normal, cluster, unlocked, node.origin, quadric.data(), area.data(),
+                     node.free_border);
   std::vector<std::uint32_t> members(count, 0);
   for (std::uint32_t v = 0; v < cluster.size(); ++v) {
     if (!unlocked[v]) continue;
@@ -316,7 +317,8 @@ Clustering uniform_clustering(const PreparedNode& node, std::uint32_t g) {
 }  // namespace
 
 ClusteredMesh cluster_grid(const PreparedNode& node, std::uint32_t g) {
-  return build_clustered_mesh(node.mesh(), node.face_normal, uniform_clustering(node, g), node.origin);
+  return build_clustered_mesh(node.mesh(), node.face_normal, uniform_clustering(node, g), node.origin,
+                              node.free_border);
 }
 
 Clustering adaptive_grid_clustering(const PreparedNode& node, std::size_t target, SearchCount rule) {

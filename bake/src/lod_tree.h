@@ -30,7 +30,8 @@
 // the small ones below them stop where their parent's LOD 0 takes over. The root
 // locks nothing (LodOptions::lock_boundary): it has no neighbour to meet, and its boundary is
 // the mesh's own border (an open surface's: a 1M terrain's root stopped at 5,654 triangles of
-// fans into its full-resolution border, it now goes on to 153). Errors
+// fans into its full-resolution border, it now goes on to 147, its border held in place by
+// border quadrics). Errors
 // accumulate along the chains (simplify.h), so every stored error is conservative with respect
 // to the original triangles of the node's region.
 //

@@ -43,10 +43,12 @@ constexpr double kRecountShare = 0.85;
 // (SearchCount::surviving), again with the exact one where that ended far below the target.
 ClusteredMesh cluster_for_target(const PreparedNode& node, std::size_t target) {
   ClusteredMesh fast = build_clustered_mesh(node.mesh(), node.face_normal,
-                                            adaptive_grid_clustering(node, target, SearchCount::surviving), node.origin);
+                                            adaptive_grid_clustering(node, target, SearchCount::surviving), node.origin,
+                                            node.free_border);
   if (static_cast<double>(fast.mesh.triangle_count()) >= kRecountShare * static_cast<double>(target)) return fast;
   ClusteredMesh exact = build_clustered_mesh(node.mesh(), node.face_normal,
-                                             adaptive_grid_clustering(node, target, SearchCount::kept), node.origin);
+                                             adaptive_grid_clustering(node, target, SearchCount::kept), node.origin,
+                                             node.free_border);
   const std::size_t kept = exact.mesh.triangle_count();
   return kept > fast.mesh.triangle_count() && kept <= target ? std::move(exact) : std::move(fast);
 }
@@ -58,8 +60,12 @@ PreparedNode prepare_node(const NodeMesh& mesh, const Bounds& cell, bool lock_bo
   node.input = &mesh;
   node.welded = weld_if_needed(mesh);
   node.positions = make_position_ids(node.mesh());
-  if (lock_boundary) node.boundary = find_boundary(node.mesh(), node.positions);
-  else node.boundary.locked_position.assign(node.positions.count, 0);
+  if (lock_boundary) {
+    node.boundary = find_boundary(node.mesh(), node.positions);
+  } else {
+    node.free_border = find_boundary(node.mesh(), node.positions).edges;
+    node.boundary.locked_position.assign(node.positions.count, 0);
+  }
   node.cell = cell;
   node.mesh_bounds = node.mesh().bounds();
   node.face_normal = face_normals(node.mesh());

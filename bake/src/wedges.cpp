@@ -161,7 +161,8 @@ bool orient_kept_triangle(const std::array<const float*, 3>& record, bool even,
 
 void add_plane_quadrics(const NodeMesh& mesh, std::span<const std::array<double, 3>> normals,
                         const std::vector<std::uint32_t>& cluster, const std::vector<std::uint8_t>& counted,
-                        const std::array<double, 3>& origin, double* quadrics, double* areas) {
+                        const std::array<double, 3>& origin, double* quadrics, double* areas,
+                        std::span<const BoundaryEdge> border) {
   constexpr std::size_t q3 = quadric_doubles(3);
   const std::size_t stride = mesh.layout.floats();
   for (std::size_t t = 0; t < mesh.triangle_count(); ++t) {
@@ -179,6 +180,22 @@ void add_plane_quadrics(const NodeMesh& mesh, std::span<const std::array<double,
       add_quadric(3, &quadrics[cluster[corner[k]] * q3], quadric);
       if (areas) areas[cluster[corner[k]]] += area;
     }
+  }
+  for (const BoundaryEdge& edge : border) {
+    if (!counted[edge.a] && !counted[edge.b]) continue;
+    const float* a = &mesh.vertices[edge.a * stride];
+    const float* b = &mesh.vertices[edge.b * stride];
+    const double along[3] = {static_cast<double>(b[0]) - a[0], static_cast<double>(b[1]) - a[1],
+                             static_cast<double>(b[2]) - a[2]};
+    const std::array<double, 3>& face = normals[edge.triangle];
+    const double across[3] = {along[1] * face[2] - along[2] * face[1], along[2] * face[0] - along[0] * face[2],
+                              along[0] * face[1] - along[1] * face[0]};
+    double p0[3];
+    for (std::size_t i = 0; i < 3; ++i) p0[i] = static_cast<double>(a[i]) - origin[i];
+    double quadric[q3];
+    plane_quadric(across, p0, kBorderWeight * (along[0] * along[0] + along[1] * along[1] + along[2] * along[2]), quadric);
+    if (counted[edge.a]) add_quadric(3, &quadrics[cluster[edge.a] * q3], quadric);
+    if (counted[edge.b]) add_quadric(3, &quadrics[cluster[edge.b] * q3], quadric);
   }
 }
 
@@ -210,7 +227,8 @@ void place_representative(const double* quadric, const double* mean, const Clamp
 }
 
 ClusteredMesh build_clustered_mesh(const NodeMesh& mesh, std::span<const std::array<double, 3>> face_normal,
-                                   const Clustering& clustering, const std::array<double, 3>& origin) {
+                                   const Clustering& clustering, const std::array<double, 3>& origin,
+                                   std::span<const BoundaryEdge> free_border) {
   const VertexLayout layout = mesh.layout;
   const int n = static_cast<int>(layout.floats());
   const int attribute_count = n - 3;
@@ -287,7 +305,7 @@ ClusteredMesh build_clustered_mesh(const NodeMesh& mesh, std::span<const std::ar
   std::vector<std::uint8_t> solved_vertex(vertex_count);
   for (std::uint32_t v = 0; v < vertex_count; ++v) solved_vertex[v] = solved(v);
   std::vector<double> cluster_quadric(clustering.count * q3, 0.0);
-  add_plane_quadrics(mesh, face_normal, cluster, solved_vertex, origin, cluster_quadric.data(), nullptr);
+  add_plane_quadrics(mesh, face_normal, cluster, solved_vertex, origin, cluster_quadric.data(), nullptr, free_border);
   auto triangle_area = [&](std::size_t t) {
     const std::array<double, 3>& fn = face_normal[t];
     return 0.5 * std::sqrt(fn[0] * fn[0] + fn[1] * fn[1] + fn[2] * fn[2]);

@@ -61,7 +61,9 @@ struct SimplifyOptions {
   // grid only: keep the node's boundary edges (used by one of its triangles) unchanged, so the
   // LODs of neighbouring nodes meet without cracks. false for a node without neighbours, the
   // root, whose boundary is the mesh's own border (an open surface's, a terrain's): it is then
-  // clustered like the interior. bade2006 always keeps it (its operator fans it).
+  // clustered like the interior, each boundary edge adding a border quadric (the plane through
+  // it perpendicular to its triangle) to its ends' clusters so that the border keeps its place.
+  // bade2006 always keeps it (its operator fans it).
   bool lock_boundary = true;
 };
 
