@@ -235,8 +235,9 @@ void append_kept_triangles(const TripleSources& sources, const std::array<std::u
 // The weight of a border quadric per squared length of its edge (add_plane_quadrics): heavy
 // enough to hold a border cluster on the border line, light enough that the pseudo-inverse
 // (quadric.h, kPseudoInverseThreshold) still sees the surface's planes next to it. The 1M
-// terrain's root chain at 1 / 10 / 100: LOD 0 error 1.505 / 1.502 / 1.576, the coarsest's 17.0 /
-// 14.1 / 14.6 (without: 2.77 and 36.8).
+// terrain's root chain at 1 / 10 / 100, measured with every node's border free (branch
+// wip/neighbour-reach): LOD 0 error 1.505 / 1.502 / 1.576, the coarsest's 17.0 / 14.1 / 14.6; as
+// it is (only the root's border free) at 10: 1.51 and 13.4, without border quadrics 2.77 and 36.8.
 inline constexpr double kBorderWeight = 10.0;
 
 // The position quadrics of a clustering: every triangle with a positive area adds its plane
