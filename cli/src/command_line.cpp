@@ -237,7 +237,9 @@ void add_walk_command(CLI::App& app, CommandContext& context) {
   command->add_option("--budget", args->budget, "Cache budget: 8M, 512K, 1G")->capture_default_str();
   command->add_option("--sse", args->sse, "Screen-space error target in pixels (1080 px viewport)")
       ->capture_default_str();
-  command->add_option("--fps", args->fps, "Frame rate of the replay; 0 = as fast as possible")
+  command->add_option("--fps", args->fps,
+                      "Frame rate of the replay; 0 = as fast as possible (the selection's cost: loads then "
+                      "rarely finish in time, and frames draw mostly fallbacks)")
       ->capture_default_str();
   command->add_option("--threads", args->threads, "Loader threads")->capture_default_str();
   command->add_option("--loads-in-flight", args->loads_in_flight, "Loads queued or running at once")
