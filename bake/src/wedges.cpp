@@ -183,17 +183,12 @@ void add_plane_quadrics(const NodeMesh& mesh, std::span<const std::array<double,
   }
   for (const BoundaryEdge& edge : border) {
     if (!counted[edge.a] && !counted[edge.b]) continue;
-    const float* a = &mesh.vertices[edge.a * stride];
-    const float* b = &mesh.vertices[edge.b * stride];
-    const double along[3] = {static_cast<double>(b[0]) - a[0], static_cast<double>(b[1]) - a[1],
-                             static_cast<double>(b[2]) - a[2]};
-    const std::array<double, 3>& face = normals[edge.triangle];
-    const double across[3] = {along[1] * face[2] - along[2] * face[1], along[2] * face[0] - along[0] * face[2],
-                              along[0] * face[1] - along[1] * face[0]};
-    double p0[3];
-    for (std::size_t i = 0; i < 3; ++i) p0[i] = static_cast<double>(a[i]) - origin[i];
+    const Vec3d a = vertex_position(mesh, edge.a);
+    const Vec3d along = sub(vertex_position(mesh, edge.b), a);
+    const Vec3d across = cross(along, normals[edge.triangle]);
+    const Vec3d p0 = sub(a, origin);
     double quadric[q3];
-    plane_quadric(across, p0, kBorderWeight * (along[0] * along[0] + along[1] * along[1] + along[2] * along[2]), quadric);
+    plane_quadric(across.data(), p0.data(), kBorderWeight * dot(along, along), quadric);
     if (counted[edge.a]) add_quadric(3, &quadrics[cluster[edge.a] * q3], quadric);
     if (counted[edge.b]) add_quadric(3, &quadrics[cluster[edge.b] * q3], quadric);
   }
