@@ -64,15 +64,16 @@ double side_of(const Point2& a, const Point2& b, const Point2& p, double on_line
   return std::abs(h) <= on_line ? 0.0 : h;
 }
 
-// The part of `polygon` left of the line a -> b (side_of), the prism's side `line`.
-Polygon clip(const Polygon& polygon, const Point2& a, const Point2& b, std::size_t line, double on_line) {
+// The part of `polygon` left of the prism's side `line`, given side_of that line for each of
+// its corners in `h`.
+Polygon clip(const Polygon& polygon, const std::array<double, 9>& h, std::size_t line) {
   const auto bit = static_cast<std::uint8_t>(1u << line);
   Polygon kept;
   for (std::size_t k = 0; k < polygon.size; ++k) {
-    const std::size_t next = (k + 1) % polygon.size;
+    const std::size_t next = k + 1 == polygon.size ? 0 : k + 1;
     const Point2& p0 = polygon.corner[k];
     const Point2& p1 = polygon.corner[next];
-    const double h0 = side_of(a, b, p0, on_line), h1 = side_of(a, b, p1, on_line);
+    const double h0 = h[k], h1 = h[next];
     if (h0 >= 0.0) {
       kept.on[kept.size] = static_cast<std::uint8_t>(polygon.on[k] | (h0 == 0.0 ? bit : 0u));
       kept.corner[kept.size++] = p0;
@@ -193,7 +194,7 @@ bool PartBounder::Prism::offer(std::uint32_t candidate) {
   // the part against the prism's sides (the projected triangle winds counter-clockwise);
   // left_of values this small are rounding: a millionth of a millionth of their scale
   const double on_line = 1e-12 * reach * reach;
-  std::array<std::array<double, 3>, 3> side;
+  std::array<std::array<double, 9>, 3> side;  // of the part's corners: the first clip's sides
   bool empty = false, inside = true;
   for (std::size_t e = 0; e < 3 && !empty; ++e) {
     for (std::size_t k = 0; k < 3; ++k) side[e][k] = side_of(corner[e], corner[(e + 1) % 3], part2d_[k], on_line);
@@ -203,12 +204,18 @@ bool PartBounder::Prism::offer(std::uint32_t candidate) {
   if (empty) return false;
   // clipped by the sides whose lines cut into the part (the others keep all of it, and a piece
   // side along them can only be the part's own); corner k of the part lies on its sides k - 1 and k
-  Polygon piece{{part2d_[0], part2d_[1], part2d_[2]},
-                {kPartSide2 | kPartSide0, kPartSide0 | kPartSide1, kPartSide1 | kPartSide2},
-                3};
-  for (std::size_t e = 0; e < 3 && !inside && piece.size > 0; ++e)
-    if (side[e][0] < 0.0 || side[e][1] < 0.0 || side[e][2] < 0.0)
-      piece = clip(piece, corner[e], corner[(e + 1) % 3], e, on_line);
+  Polygon piece;  // only the corners in use written: zeroing all nine was 6% of this function's time
+  piece.corner[0] = part2d_[0], piece.corner[1] = part2d_[1], piece.corner[2] = part2d_[2];
+  piece.on[0] = kPartSide2 | kPartSide0, piece.on[1] = kPartSide0 | kPartSide1, piece.on[2] = kPartSide1 | kPartSide2;
+  piece.size = 3;
+  bool clipped = false;
+  for (std::size_t e = 0; e < 3 && !inside && piece.size > 0; ++e) {
+    if (!(side[e][0] < 0.0 || side[e][1] < 0.0 || side[e][2] < 0.0)) continue;
+    if (clipped)
+      for (std::size_t k = 0; k < piece.size; ++k) side[e][k] = side_of(corner[e], corner[(e + 1) % 3], piece.corner[k], on_line);
+    piece = clip(piece, side[e], e);
+    clipped = true;
+  }
   if (piece.size < 3) return false;
   if (piece_count_ == kMaxPieces) {  // never seen: a part lies over a few output triangles
     settled_ = true;
@@ -216,7 +223,7 @@ bool PartBounder::Prism::offer(std::uint32_t candidate) {
   }
   unsigned open = 0;
   for (std::size_t k = 0; k < piece.size; ++k) {
-    const unsigned along = piece.on[k] & piece.on[(k + 1) % piece.size];
+    const unsigned along = piece.on[k] & piece.on[k + 1 == piece.size ? 0 : k + 1];
     if ((along & kPartSides) == 0) open |= along;
   }
   piece_triangle_[piece_count_] = candidate;
