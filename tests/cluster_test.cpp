@@ -460,6 +460,37 @@ TEST(BoundaryTest, FindsEdgesUsedOnceKeyedOnPositions) {
   EXPECT_EQ(open.locked_position, (std::vector<std::uint8_t>{1, 0, 1, 1}));
 }
 
+TEST(BoundaryTest, KeepsOnlyTheEdgesAnotherNodeCanShare) {
+  // The unit square's grid (border on x, y = 0 and 1) in a cell one unit wider on every side:
+  // its border lies 1 unit behind the cell's faces in x and y, 0.5 in z.
+  const NodeMesh grid = plane_grid(8);
+  const PositionIds positions = make_position_ids(grid);
+  Bounds cell;
+  cell.min = {-1, -1, -0.5f};
+  cell.max = {2, 2, 0.5f};
+  Bounds root;  // every face of the cell has other cells behind it
+  root.min = {-4, -4, -4};
+  root.max = {5, 5, 5};
+  const std::size_t border = 4 * 8;
+  auto kept_and_free = [&](double reach, const Bounds& root_cell) {
+    const Boundary b = find_boundary(grid, positions, cell, NeighbourReach{reach, root_cell});
+    return std::pair{b.edges.size(), b.free_edges.size()};
+  };
+  // another node's triangle reaches 0.5 past the faces: every edge 0.5 deep may be shared
+  EXPECT_EQ(kept_and_free(0.5, root), std::pair(border, std::size_t{0}));
+  // it reaches 0.4: none can (0.5 behind the z faces, 1 behind the others)
+  EXPECT_EQ(kept_and_free(0.4, root), std::pair(std::size_t{0}, border));
+  // the z faces on the root's surface have nothing behind them: 0.9 is short of the x, y faces
+  Bounds flat_root = root;
+  flat_root.min[2] = cell.min[2];
+  flat_root.max[2] = cell.max[2];
+  EXPECT_EQ(kept_and_free(0.9, flat_root), std::pair(std::size_t{0}, border));
+  EXPECT_EQ(kept_and_free(1.0, flat_root), std::pair(border, std::size_t{0}));
+  // the default (infinite reach) and an unknown root keep everything
+  EXPECT_EQ(kept_and_free(NeighbourReach{}.reach, root), std::pair(border, std::size_t{0}));
+  EXPECT_EQ(kept_and_free(0.9, Bounds{}), std::pair(border, std::size_t{0}));
+}
+
 TEST(SimplifyTest, AFreeBorderIsSimplifiedWithoutEroding) {
   // A node that keeps no boundary (the root) clusters its border like the interior; the border
   // quadrics (add_plane_quadrics) hold the border clusters on the border: the flat square's
@@ -483,6 +514,39 @@ TEST(SimplifyTest, AFreeBorderIsSimplifiedWithoutEroding) {
       EXPECT_LT(off, 1e-5f) << "a border vertex at (" << x << ", " << y << ") left the outline";
     }
   EXPECT_LT(result.error_bound, 1e-4);
+}
+
+TEST(SimplifyTest, AFreeBorderBelowTheRootIsSimplifiedWhereThatCostsLess) {
+  // A bowl (z = 0.3 r^2 around the square's centre) in a cell one unit wider than it in x and y:
+  // with a reach of 0.4 no other node can share its border (NeighbourReach), so the step may
+  // simplify it. It keeps whichever of the two steps, border free or kept, has the lower error
+  // times triangles: never costlier than keeping it, and where the border is most of the
+  // wanted triangles (128 edges for 200), the free border's.
+  NodeMesh bowl = plane_grid(32, VertexLayout{});
+  for (std::size_t v = 0; v < bowl.vertex_count(); ++v) {
+    float* p = &bowl.vertices[3 * v];
+    p[2] = 0.3f * ((p[0] - 0.5f) * (p[0] - 0.5f) + (p[1] - 0.5f) * (p[1] - 0.5f));
+  }
+  Bounds cell;
+  cell.min = {-1, -1, -2};
+  cell.max = {2, 2, 2};
+  Bounds root;
+  root.min = {-4, -4, -4};
+  root.max = {5, 5, 5};
+  auto cost = [](const SimplifyResult& r) { return r.error_bound * static_cast<double>(r.mesh.triangle_count()); };
+  for (const std::uint32_t target : {200u, 600u, 1200u}) {
+    SimplifyOptions free_border = grid_target(target);
+    free_border.neighbours = NeighbourReach{0.4, root};
+    const SimplifyResult result = simplify(bowl, cell, free_border);
+    const SimplifyResult kept = simplify(bowl, cell, grid_target(target));
+    ASSERT_GT(result.mesh.triangle_count(), 0u);
+    EXPECT_LE(result.mesh.triangle_count(), target);
+    EXPECT_LE(cost(result), cost(kept)) << "target " << target;
+    if (target == 200) {
+      EXPECT_LT(odd_edges(result.mesh).size(), odd_edges(kept.mesh).size() / 2) << "the border was kept";
+      EXPECT_LT(result.mesh.triangle_count(), kept.mesh.triangle_count());
+    }
+  }
 }
 
 TEST(SimplifyTest, BoundaryVerticesAndEdgesSurviveBitIdentical) {

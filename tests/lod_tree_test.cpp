@@ -190,25 +190,6 @@ TEST_F(LodTreeTest, EveryNodeHasAChainWhoseErrorsGrowAsItsTrianglesShrink) {
   EXPECT_GT(root.lods.back().error, 0.0);
 }
 
-TEST_F(LodTreeTest, AnOpenTerrainsRootChainGoesOnPastItsBorder) {
-  // A terrain's border edges are used by one triangle, like a node's cut; every node keeps its
-  // boundary for its neighbours, but the root has none (lod_tree.h), so its chain simplifies
-  // the border too and ends at a few hundred triangles like a closed rock's. Its children keep
-  // their share of the border at full resolution.
-  const LoadedTree t = bake_and_load(options(terrain_ply(), "terrain"));
-  const Manifest& m = t.manifest;
-  ASSERT_GT(m.nodes.size(), 9u);
-  const NodeInfo& root = m.nodes[0];
-  EXPECT_LE(root.lods.back().triangles, 256u);
-  std::uint64_t children_coarsest = 0;
-  for (std::int32_t c : root.children)
-    if (c >= 0) children_coarsest += m.nodes[static_cast<std::size_t>(c)].lods.back().triangles;
-  std::printf("[ info ] terrain %llu tris: root's coarsest LOD %u tris, its children's coarsest together %llu\n",
-              static_cast<unsigned long long>(m.input_triangles), root.lods.back().triangles,
-              static_cast<unsigned long long>(children_coarsest));
-  EXPECT_GT(children_coarsest, 4u * root.lods.back().triangles);
-}
-
 // A LOD of a positions-only mesh with one vertex per two triangles: 18 bytes per triangle
 // ((triangles / 2 * 3 floats + 3 * triangles indices) * 4), so the bounds below are 18x the
 // triangle sums.
@@ -382,9 +363,68 @@ void expect_random_cuts_add_no_open_edge(const LoadedTree& t, bool input_closed)
   EXPECT_GT(coarser_than_leaves, 90u) << "the cuts should mostly be simplified";
 }
 
+// The edges of a mesh as pairs of exact positions (ascending), with how many triangles use each.
+std::map<std::pair<Position, Position>, std::uint32_t> edge_uses(const NodeMesh& mesh) {
+  const std::size_t stride = mesh.layout.floats();
+  auto position = [&](std::uint32_t v) {
+    const float* f = &mesh.vertices[v * stride];
+    return Position{std::bit_cast<std::uint32_t>(f[0]), std::bit_cast<std::uint32_t>(f[1]),
+                    std::bit_cast<std::uint32_t>(f[2])};
+  };
+  std::map<std::pair<Position, Position>, std::uint32_t> uses;
+  for (std::size_t c = 0; c < mesh.indices.size(); ++c) {
+    Position a = position(mesh.indices[c]), b = position(mesh.indices[c % 3 == 2 ? c - 2 : c + 1]);
+    if (b < a) std::swap(a, b);
+    if (a != b) ++uses[{a, b}];
+  }
+  return uses;
+}
+
+// Every original edge two leaves share (one original triangle in each) is in every LOD of every
+// node that holds one of the two leaves but not the other: whichever LODs a cut takes on either
+// side, both have it, so no cut opens there. On a closed input this is what keeps every cut
+// closed; on an open one, whose own border the nodes simplify (NeighbourReach), it is the only
+// way to tell a crack from the border. Returns the number of shared edges checked.
+std::size_t expect_shared_edges_kept(const LoadedTree& t) {
+  const Manifest& m = t.manifest;
+  std::map<std::pair<Position, Position>, std::vector<std::size_t>> leaves_of;
+  for (std::size_t i = 0; i < m.nodes.size(); ++i)
+    if (m.nodes[i].is_leaf())
+      for (const auto& [edge, count] : edge_uses(t.lods[i][0]))
+        if (count == 1) leaves_of[edge].push_back(i);
+  std::map<std::pair<std::size_t, std::size_t>, std::map<std::pair<Position, Position>, std::uint32_t>> lod_edges;
+  auto path_to_root = [&](std::size_t node) {
+    std::vector<std::size_t> path;
+    for (auto n = static_cast<std::int32_t>(node); n >= 0; n = m.nodes[static_cast<std::size_t>(n)].parent)
+      path.push_back(static_cast<std::size_t>(n));
+    return path;
+  };
+  std::size_t checked = 0, missing = 0;
+  for (const auto& [edge, leaves] : leaves_of) {
+    if (leaves.size() != 2) continue;  // the mesh's own border (1), or non-manifold
+    ++checked;
+    const std::vector<std::size_t> a = path_to_root(leaves[0]), b = path_to_root(leaves[1]);
+    for (const auto* side : {&a, &b}) {
+      const auto* other = side == &a ? &b : &a;
+      for (const std::size_t node : *side) {
+        if (std::find(other->begin(), other->end(), node) != other->end()) break;  // a common ancestor
+        for (std::size_t k = 0; k < m.nodes[node].lods.size(); ++k) {
+          auto [it, added] = lod_edges.try_emplace({node, k});
+          if (added) it->second = edge_uses(t.lods[node][k]);
+          if (it->second.count(edge) == 0 && ++missing <= 5)
+            ADD_FAILURE() << "node '" << m.nodes[node].path << "' LOD " << k << " lost an edge it shares";
+        }
+      }
+    }
+  }
+  EXPECT_EQ(missing, 0u);
+  return checked;
+}
+
 TEST_F(LodTreeTest, RandomCutsOfAClosedRockHaveNoOpenEdge) {
   const LoadedTree t = bake_and_load(options(rock_ply(), "rock-cuts"));
   expect_random_cuts_add_no_open_edge(t, true);
+  EXPECT_GT(expect_shared_edges_kept(t), 100u);
 }
 
 TEST_F(LodTreeTest, RandomCutsOfACityAddNoOpenEdge) {
@@ -496,6 +536,39 @@ TEST_F(LodTreeTest, StoredErrorsBoundTheDistanceFromTheOriginalTriangles) {
               "%u triangles error %.4g (diagonal %.4g)\n",
               check.checked, check.tightest, m.nodes[0].lods.back().triangles,
               m.nodes[0].lods.back().error, diagonal);
+}
+
+TEST_F(LodTreeTest, AnOpenTerrainsNodesKeepTheirSeamsAndSimplifyTheirBorder) {
+  // A terrain's border edges are used by one triangle, like the edges a node shares with its
+  // neighbours; the nodes keep only the boundary edges a neighbour's triangle can reach
+  // (NeighbourReach: within a third of the longest input edge of a face of their cell with other
+  // cells behind it), so the border is simplified at every level, and held in place by the
+  // border quadrics. The root's children keep few of the original border edges in their
+  // coarsest LODs (before: every one of them), every edge two leaves share stays in every node
+  // between them, and every stored error still bounds the measured distance.
+  const LoadedTree t = bake_and_load(options(terrain_ply(), "terrain"));
+  const Manifest& m = t.manifest;
+  ASSERT_GT(m.nodes.size(), 9u);
+  EXPECT_LE(m.nodes[0].lods.back().triangles, 256u);
+  // the terrain's own border: the edges one original triangle uses
+  std::map<std::pair<Position, Position>, std::uint32_t> original;
+  for (std::size_t i = 0; i < m.nodes.size(); ++i)
+    if (m.nodes[i].is_leaf())
+      for (const auto& [edge, count] : edge_uses(t.lods[i][0])) original[edge] += count;
+  std::map<std::pair<Position, Position>, std::uint32_t> coarsest;
+  for (std::int32_t c : m.nodes[0].children)
+    if (c >= 0) coarsest.merge(edge_uses(t.lods[static_cast<std::size_t>(c)].back()));
+  std::size_t border = 0, border_kept = 0;
+  for (const auto& [edge, count] : original)
+    if (count == 1) ++border, border_kept += coarsest.count(edge);
+  const std::size_t shared = expect_shared_edges_kept(t);
+  const ErrorCheck errors = expect_stored_errors_bound(t);
+  std::printf("[ info ] terrain %llu tris: %zu edges shared between leaves kept; the root's children's coarsest "
+              "LODs keep %zu of its %zu border edges; %zu node LODs' errors checked\n",
+              static_cast<unsigned long long>(m.input_triangles), shared, border_kept, border, errors.checked);
+  EXPECT_GT(shared, 100u);
+  EXPECT_GT(border, 100u);
+  EXPECT_LT(border_kept * 4, border) << "the root's children keep the terrain's border";
 }
 
 // --- internal nodes built streaming ---

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstring>
 #include <functional>
 #include <limits>
@@ -58,6 +59,16 @@ SortKeyFn centroid_morton_key(const MortonQuantizer& quantizer, VertexLayout lay
       keys[i] = centroid_key(quantizer, corner[0], corner[1], corner[2]);
     }
   };
+}
+
+// The longest edge of the triangle with corners a, b, c (positions), model units.
+double triangle_longest_edge(const float* a, const float* b, const float* c) {
+  auto length2 = [](const float* p, const float* q) {
+    double sum = 0;
+    for (int i = 0; i < 3; ++i) sum += (static_cast<double>(p[i]) - q[i]) * (static_cast<double>(p[i]) - q[i]);
+    return sum;
+  };
+  return std::sqrt(std::max({length2(a, b), length2(b, c), length2(c, a)}));
 }
 
 // How the budget is divided in the octree stage: the sort gets what the leaf buffers and the
@@ -187,6 +198,13 @@ class OctreeInput {
   // SoupOptions::sink.
   Status push(std::span<const std::byte> records) {
     if (cleanup_signal_received()) return interrupted();
+    const std::size_t record_bytes = soup_record_bytes(layout_);
+    for (std::size_t offset = 0; offset + record_bytes <= records.size(); offset += record_bytes) {
+      float corner[3][3];
+      for (int c = 0; c < 3; ++c)
+        std::memcpy(corner[c], records.data() + offset + soup_corner_offset(layout_, c), sizeof corner[c]);
+      longest_edge_ = std::max(longest_edge_, triangle_longest_edge(corner[0], corner[1], corner[2]));
+    }
     if (sorter_) return sorter_->push(records);
     return writer_->append(records.data(), records.size() / soup_record_bytes(layout_));
   }
@@ -200,6 +218,8 @@ class OctreeInput {
   }
 
   const RootCube& cube() const { return cube_; }
+  // The longest edge of the triangles pushed so far (all of them once the soup stage is done).
+  double longest_edge() const { return longest_edge_; }
   const OctreeBudget& budget() const { return budget_; }
   unsigned workers() const { return lod_workers(threads_); }
   bool streamed() const { return file_.empty(); }  // no soup file was written
@@ -249,17 +269,19 @@ class OctreeInput {
   SortKeyFn key_;
   OctreeBudget budget_;
   std::unique_ptr<RecordSorter> sorter_;
+  double longest_edge_ = 0;
   TempFile file_;
   std::optional<RecordWriter> writer_;
 };
 
 LodTreeOptions lod_tree_options(const BakeOptions& options, VertexLayout layout,
-                                const RootCube& cube, const fs::path& root, unsigned workers,
-                                const OctreeBudget& budget, const fs::path& work) {
+                                const RootCube& cube, double longest_input_edge, const fs::path& root,
+                                unsigned workers, const OctreeBudget& budget, const fs::path& work) {
   LodTreeOptions o;
   o.root = root;
   o.layout = layout;
   o.cube = cube;
+  o.longest_input_edge = longest_input_edge;
   o.build_lods = options.lods;
   o.lod.method = options.method;
   o.workers = workers;
@@ -350,7 +372,7 @@ Result<OctreeResult> build_octree(const BakeOptions& options, const SoupResult& 
   // LOD chains (and then their parents') are built meanwhile (lod_tree.h)
   start = Clock::now();
   LodTreeBuilder lod_tree(
-      lod_tree_options(options, soup.layout, result.cube, root, workers, budget, input.work()));
+      lod_tree_options(options, soup.layout, result.cube, input.longest_edge(), root, workers, budget, input.work()));
   OctreeBuilder* builder_ptr = nullptr;
   LeafRecordSpill spill(input.work(), soup.layout, budget.io_bytes,
                         options.memory_budget_bytes / kStreamedSortShare);
@@ -411,10 +433,12 @@ bool mesh_octree_fits(const BakeOptions& options, unsigned workers, VertexLayout
   return bytes <= budget->sort_bytes;
 }
 
-// The mesh's triangles in leaf order: ids[i] with its centroid key keys[i].
+// The mesh's triangles in leaf order: ids[i] with its centroid key keys[i]; the longest edge of
+// any of them.
 struct MeshOrder {
   PageArray<std::uint64_t> keys;
   PageArray<std::uint32_t> ids;
+  double longest_edge = 0;
 };
 
 MeshOrder sort_mesh_triangles(const BakeOptions& options, unsigned threads, const SoupMesh& mesh,
@@ -423,21 +447,24 @@ MeshOrder sort_mesh_triangles(const BakeOptions& options, unsigned threads, cons
   const std::size_t n = mesh.triangles.size() / 3;
   const MortonQuantizer quantizer(cube, options.max_depth);
   MeshOrder sorted{PageArray<std::uint64_t>(n), PageArray<std::uint32_t>(n)};
-  auto compute = [&](std::size_t begin, std::size_t end) {
+  auto compute = [&](std::size_t begin, std::size_t end, double& longest) {
     for (std::size_t t = begin; t < end; ++t) {
       const std::uint32_t* v = mesh.triangles.data() + 3 * t;
-      sorted.keys[t] = centroid_key(quantizer, mesh.vertices.data() + std::size_t{v[0]} * floats,
-                                    mesh.vertices.data() + std::size_t{v[1]} * floats,
-                                    mesh.vertices.data() + std::size_t{v[2]} * floats);
+      const float* a = mesh.vertices.data() + std::size_t{v[0]} * floats;
+      const float* b = mesh.vertices.data() + std::size_t{v[1]} * floats;
+      const float* c = mesh.vertices.data() + std::size_t{v[2]} * floats;
+      sorted.keys[t] = centroid_key(quantizer, a, b, c);
       sorted.ids[t] = static_cast<std::uint32_t>(t);
+      longest = std::max(longest, triangle_longest_edge(a, b, c));
     }
   };
+  double longest[2] = {0, 0};
   if (threads > 1 && n >= (1u << 16)) {
-    std::thread helper(compute, n / 2, n);
-    compute(0, n / 2);
+    std::thread helper(compute, n / 2, n, std::ref(longest[1]));
+    compute(0, n / 2, longest[0]);
     helper.join();
   } else {
-    compute(0, n);
+    compute(0, n, longest[0]);
   }
   {
     // By key, then triangle id: the ids start in triangle order and the sort is stable.
@@ -449,6 +476,7 @@ MeshOrder sort_mesh_triangles(const BakeOptions& options, unsigned threads, cons
     radix_sort(keys, ids, keys_tmp, ids_tmp, n);
     if (keys != sorted.keys.get()) std::swap(sorted, scratch);  // keep the result, free the rest
   }
+  sorted.longest_edge = std::max(longest[0], longest[1]);
   return sorted;
 }
 
@@ -473,7 +501,7 @@ Result<OctreeResult> build_octree_from_mesh(const BakeOptions& options, unsigned
   // octree: the tree from the keys alone; each leaf's records gathered from the mesh
   start = Clock::now();
   LodTreeBuilder lod_tree(
-      lod_tree_options(options, mesh.layout, result.cube, root, workers, budget.value(), work));
+      lod_tree_options(options, mesh.layout, result.cube, sorted.longest_edge, root, workers, budget.value(), work));
   const std::size_t record_bytes = soup_record_bytes(mesh.layout);
   std::size_t next_leaf = 0;  // first entry of `sorted` in the next leaf
   // The soup records of the next `count` triangles of `sorted`.

@@ -3,12 +3,35 @@
 
 #include <algorithm>
 #include <cstring>
+#include <limits>
 #include <utility>
 #include <vector>
 
 #include "flat_hash.h"
 
 namespace octolod::bake {
+namespace {
+
+// Whether the midpoint of `edge` lies within the reach of the other nodes' side of `cell` (on
+// it or beyond included): how deep it lies is its least distance to a face of the cell with
+// other cells behind it (not on the root's surface).
+bool within_reach(const NodeMesh& mesh, const BoundaryEdge& edge, const Bounds& cell, const NeighbourReach& neighbours) {
+  if (neighbours.reach == std::numeric_limits<double>::infinity()) return true;
+  const std::size_t stride = mesh.layout.floats();
+  const float* a = &mesh.vertices[std::size_t{edge.a} * stride];
+  const float* b = &mesh.vertices[std::size_t{edge.b} * stride];
+  const Bounds& root = neighbours.root;
+  const bool root_known = !root.empty();
+  double depth = std::numeric_limits<double>::infinity();
+  for (std::size_t k = 0; k < 3; ++k) {
+    const double middle = 0.5 * (static_cast<double>(a[k]) + b[k]);
+    if (!(root_known && cell.min[k] <= root.min[k])) depth = std::min(depth, middle - cell.min[k]);
+    if (!(root_known && cell.max[k] >= root.max[k])) depth = std::min(depth, cell.max[k] - middle);
+  }
+  return depth <= neighbours.reach;
+}
+
+}  // namespace
 
 PositionIds make_position_ids(const NodeMesh& mesh) {
   const std::size_t stride = mesh.layout.floats();
@@ -33,7 +56,8 @@ PositionIds make_position_ids(const NodeMesh& mesh) {
   return ids;
 }
 
-Boundary find_boundary(const NodeMesh& mesh, const PositionIds& positions) {
+Boundary find_boundary(const NodeMesh& mesh, const PositionIds& positions, const Bounds& cell,
+                       const NeighbourReach& neighbours) {
   // Edge table by a counting sort on the smaller position id: every bucket (the edges of one
   // position, a handful on a surface) sorted by (larger id, corner), so equal edges form runs whose
   // first entry is the edge's first use. Sequential passes instead of a hash table over every
@@ -75,6 +99,10 @@ Boundary find_boundary(const NodeMesh& mesh, const PositionIds& positions) {
   for (const std::uint32_t c : first_corners) {
     const std::uint32_t next = c % 3 == 2 ? c - 2 : c + 1;
     const BoundaryEdge edge{mesh.indices[c], mesh.indices[next], c / 3};
+    if (!within_reach(mesh, edge, cell, neighbours)) {
+      boundary.free_edges.push_back(edge);
+      continue;
+    }
     boundary.edges.push_back(edge);
     boundary.locked_position[positions.of_vertex[edge.a]] = 1;
     boundary.locked_position[positions.of_vertex[edge.b]] = 1;

@@ -12,11 +12,15 @@
 //
 // Every vertex record whose position is an end of a boundary edge is locked: kept bit-identical
 // in every LOD. A vertex on an attribute seam interior to the node is not locked.
+//
+// Only the boundary edges another node can share need to be kept (NeighbourReach): the rest,
+// the mesh's own border deep inside the node, is clustered like the interior.
 #pragma once
 
 #include <cstdint>
 #include <vector>
 
+#include "octolod/bake/simplify.h"
 #include "octolod/formats/node_file.h"
 
 namespace octolod::bake {
@@ -38,9 +42,15 @@ struct BoundaryEdge {
 struct Boundary {
   std::vector<BoundaryEdge> edges;             // in order of first use (triangle, then corner)
   std::vector<std::uint8_t> locked_position;   // per position id: 1 when on a boundary edge
+  // With NeighbourReach: the boundary edges no other node can share (the mesh's own border
+  // deep inside the node), not in `edges` and not locked.
+  std::vector<BoundaryEdge> free_edges;
 };
 
 // Edges with both ends at the same position (degenerate triangles) are never boundary edges.
-Boundary find_boundary(const NodeMesh& mesh, const PositionIds& positions);
+// With `neighbours`, only the boundary edges other nodes may share with the node of `cell` are
+// kept (and their ends locked): those within neighbours.reach of its faces (NeighbourReach).
+Boundary find_boundary(const NodeMesh& mesh, const PositionIds& positions, const Bounds& cell = {},
+                       const NeighbourReach& neighbours = {});
 
 }  // namespace octolod::bake

@@ -85,8 +85,10 @@ class GridCellKeys {
 
 // `mesh` must be valid (indices in range, finite positions; checked by simplify_node) and
 // outlive the result, which refers to it. Without lock_boundary the boundary is left empty
-// (nothing locked: SimplifyOptions::lock_boundary).
-PreparedNode prepare_node(const NodeMesh& mesh, const Bounds& cell, bool lock_boundary = true);
+// (nothing locked: SimplifyOptions::lock_boundary); with it, the boundary edges `neighbours`
+// may share are kept.
+PreparedNode prepare_node(const NodeMesh& mesh, const Bounds& cell, bool lock_boundary = true,
+                          const NeighbourReach& neighbours = {});
 
 // The next resolution of a search for the finest grid whose triangle count (the last one,
 // `count` at resolution g) stays within `target`, given the finest feasible resolution `lo` and

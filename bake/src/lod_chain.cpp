@@ -53,6 +53,7 @@ Result<std::vector<Lod>> build_lods(NodeMesh input, double input_error, const Bo
     step.method = options.method;
     step.target_triangles = static_cast<std::uint32_t>(std::max<std::size_t>(target, 1));
     step.lock_boundary = options.lock_boundary;
+    step.neighbours = options.neighbours;
     Result<SimplifyResult> simplified = simplify_node(current(), cell, step);
     if (!simplified.ok()) return simplified.status();
     const std::size_t count = simplified->mesh.triangle_count();

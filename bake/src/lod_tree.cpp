@@ -7,6 +7,7 @@
 #include <cassert>
 #include <cerrno>
 #include <chrono>
+#include <cmath>
 #include <condition_variable>
 #include <limits>
 #include <mutex>
@@ -35,6 +36,15 @@ using Clock = std::chrono::steady_clock;
 
 std::size_t mesh_bytes(const NodeMesh& mesh) {
   return (mesh.vertices.size() + mesh.indices.size()) * sizeof(float);
+}
+
+// LodOptions::neighbours from the input's longest edge: a third of it (NeighbourReach), with
+// room for rounding: the node cells are the cube's cells rounded to float (an ulp of the
+// coordinates), the centroids summed in double.
+NeighbourReach neighbours(double longest_input_edge, const RootCube& cube) {
+  double magnitude = cube.size;
+  for (const double origin : cube.origin) magnitude = std::max(magnitude, std::abs(origin) + cube.size);
+  return {longest_input_edge / 3.0 * (1.0 + 1e-6) + 1e-6 * magnitude, cube.cell(0, 0)};
 }
 
 // A finished child as its parent sees it: its chain, and its LOD 0 while kept in memory.
@@ -316,6 +326,7 @@ class LodTreeBuilder::Impl {
     // the root has no neighbours to meet: its boundary is the mesh's own border
     LodOptions lod = options_.lod;
     lod.lock_boundary = s.shape.depth > 0;
+    lod.neighbours = neighbours(options_.longest_input_edge, options_.cube);
     // every internal node's input is simplified down to the root's limit, its chain only to its own
     lod.input_min_triangles = options_.lod.min_triangles;
     if (s.shape.depth > 0) lod.min_triangles = options_.node_min_triangles;

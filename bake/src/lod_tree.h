@@ -31,7 +31,9 @@
 // locks nothing (LodOptions::lock_boundary): it has no neighbour to meet, and its boundary is
 // the mesh's own border (an open surface's: a 1M terrain's root stopped at 5,654 triangles of
 // fans into its full-resolution border, it now goes on to 147, its border held in place by
-// border quadrics). Errors
+// border quadrics). The other nodes keep only the boundary edges another node's triangle can
+// reach (LodOptions::neighbours, from LodTreeOptions::longest_input_edge) and simplify the
+// mesh's own border elsewhere, with border quadrics as well. Errors
 // accumulate along the chains (simplify.h), so every stored error is conservative with respect
 // to the original triangles of the node's region.
 //
@@ -54,6 +56,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <functional>
+#include <limits>
 #include <memory>
 #include <string_view>
 #include <vector>
@@ -95,6 +98,11 @@ struct LodTreeOptions {
   // other two closer to the reference; the runtime's walks at 2 px drew 0.2-1.3% more
   // triangles. At 2048: 2.75 s, 1-4% more triangles drawn (docs/benchmarks.md).
   std::uint32_t node_min_triangles = 1024;
+  // The longest edge of any input triangle, model units: every node below the root keeps only
+  // the boundary edges within a third of it of its cell's faces (LodOptions::neighbours), which
+  // are all it can share with other nodes; the mesh's own border deeper inside is simplified.
+  // Infinity (unknown): every node keeps its whole boundary.
+  double longest_input_edge = std::numeric_limits<double>::infinity();
   unsigned workers = 0;         // threads besides the caller; 0: the caller does all node work
   std::size_t queue_bytes = 0;  // leaf records waiting for a thread (one leaf always fits)
   std::size_t keep_bytes = 0;   // children's LODs kept in memory for their parents

@@ -21,6 +21,7 @@
 #pragma once
 
 #include <cstdint>
+#include <limits>
 #include <span>
 #include <vector>
 
@@ -46,6 +47,20 @@ enum class ClusterMethod {
   bade2006,
 };
 
+// Which boundary edges of a node other nodes may share: the octree's triangles go to the node
+// holding their centroid, so a triangle of another node has its centroid outside the node's
+// cell but inside the root's, within a third of its longest edge of the midpoint of each of its
+// edges (for the edge a b and the third corner v, centroid - midpoint = ((v - a) + (v - b)) / 6).
+// With `reach` at least a third of the input's longest triangle edge (plus rounding), a boundary
+// edge whose midpoint lies deeper than `reach` behind every face of the cell that is not on the
+// root's surface is used by no other node. Model units.
+struct NeighbourReach {
+  // Infinity: any boundary edge may be shared.
+  double reach = std::numeric_limits<double>::infinity();
+  // The root node's cell. Empty: every face of the cell may have a neighbour behind it.
+  Bounds root;
+};
+
 struct SimplifyOptions {
   ClusterMethod method = ClusterMethod::grid;
   // grid only: the wanted triangle count. The adaptive grid (its coarse resolution and how many
@@ -65,6 +80,11 @@ struct SimplifyOptions {
   // it perpendicular to its triangle) to its ends' clusters so that the border keeps its place.
   // bade2006 always keeps it (its operator fans it).
   bool lock_boundary = true;
+  // grid only, with lock_boundary: which boundary edges other nodes may share. The others, the
+  // mesh's own border deep inside the node (a terrain's, a scan's holes), are clustered like the
+  // interior with border quadrics, unless the step with them kept has the lower error times
+  // triangles (the step is then taken both ways). Default: every boundary edge is kept.
+  NeighbourReach neighbours;
 };
 
 struct SimplifyResult {
@@ -118,6 +138,8 @@ struct LodOptions {
   bool include_input = true;
   // SimplifyOptions::lock_boundary of every step: false only for the root.
   bool lock_boundary = true;
+  // SimplifyOptions::neighbours of every step.
+  NeighbourReach neighbours;
 };
 
 struct Lod {
