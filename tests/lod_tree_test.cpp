@@ -542,8 +542,8 @@ TEST_F(LodTreeTest, AnOpenTerrainsNodesKeepTheirSeamsAndSimplifyTheirBorder) {
   // A terrain's border edges are used by one triangle, like the edges a node shares with its
   // neighbours; the nodes keep only the boundary edges a neighbour's triangle can reach
   // (NeighbourReach: within a third of the longest input edge of a face of their cell with other
-  // cells behind it), so the border is simplified at every level, and held in place by the
-  // border quadrics. The root's children keep few of the original border edges in their
+  // cells behind it), so the border can be simplified at every level (where that pays: simplify.h),
+  // held in place by the border quadrics. The root's children keep few of the original border edges in their
   // coarsest LODs (before: every one of them), every edge two leaves share stays in every node
   // between them, and every stored error still bounds the measured distance.
   const LoadedTree t = bake_and_load(options(terrain_ply(), "terrain"));
