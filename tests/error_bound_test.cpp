@@ -83,6 +83,9 @@ TEST(ErrorBound, HintsGiveTheSameBoundAsQueries) {
   EXPECT_GE(hinted, 0.01 * (1.0 - 1e-6));
   EXPECT_LE(hinted, 0.0101);
   EXPECT_NEAR(hinted, hausdorff_upper_bound(input, output), 1e-9);
+  // a caller that gives up above a distance gets the bound up to it, +infinity beyond
+  EXPECT_EQ(hausdorff_upper_bound(input, output, hints, hinted), hinted);
+  EXPECT_EQ(hausdorff_upper_bound(input, output, hints, 0.5 * hinted), std::numeric_limits<double>::infinity());
 }
 
 TEST(ErrorBound, AFoldInTheOutputDoesNotHideTheDistance) {

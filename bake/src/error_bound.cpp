@@ -125,9 +125,12 @@ double finish(double total2, const NodeMesh& input, const NodeMesh& output) {
 
 }  // namespace
 
-double hausdorff_upper_bound(const NodeMesh& input, const NodeMesh& output, const ImageHints& hints) {
+double hausdorff_upper_bound(const NodeMesh& input, const NodeMesh& output, const ImageHints& hints,
+                             double give_up) {
   if (input.triangle_count() == 0) return 0.0;
   if (output.triangle_count() == 0) return kInfinity;
+  // the squared totals below are lower bounds of the result's square: above this, give up
+  const double give_up2 = give_up * give_up;
   const bool have_fans = !hints.vertex_cluster.empty() && !hints.fan_offset.empty();
   const bool have_images = !hints.nearby_output_triangle.empty();
   auto image_of = [&](std::size_t t) {
@@ -189,6 +192,7 @@ double hausdorff_upper_bound(const NodeMesh& input, const NodeMesh& output, cons
     total2 = std::max(total2, vertex_best2[v]);
   }
   worst = {};
+  if (total2 > give_up2) return kInfinity;
 
   // The bound of input triangle `part` where it may raise the total, given `prism2`, its prism
   // pieces' bound over `candidates`: that bound, unless the pieces leave a gap or overlap (1% of
@@ -276,14 +280,17 @@ double hausdorff_upper_bound(const NodeMesh& input, const NodeMesh& output, cons
     if (prism2 == kInfinity) pending.push_back({best2, static_cast<std::uint32_t>(t)});
     else if (std::min(prism2, best2) > total2)
       total2 = std::max(total2, std::min(best2, closer_look(p, gathered(), prism2, total2)));
+    if (total2 > give_up2) return kInfinity;
   }
 
   // The closer look for the triangles the prism pieces did not cover, worst first.
   total2 = settle_pending(pending, total2, [&](std::uint32_t t, double enough2) {
     return closer_look(corners(input, t), gather(t, few_of(t, own)), kInfinity, enough2);
   });
+  if (total2 > give_up2) return kInfinity;
   if (!unresolved.empty()) total2 = bvh_bound2(input, bounder, bvh(), unresolved, total2);
-  return finish(total2, input, output);
+  const double bound = finish(total2, input, output);
+  return bound > give_up ? kInfinity : bound;
 }
 
 double hausdorff_upper_bound(const NodeMesh& input, const NodeMesh& output) {

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstdint>
+#include <limits>
 #include <span>
 
 #include "octolod/formats/node_file.h"
@@ -33,7 +34,10 @@ struct ImageHints {
 // The same bound, faster with hints, and as tight: the candidate output triangles of an input
 // triangle come from the hints instead of closest-point queries (its image, the images nearest
 // to its corners, the fans around its corners' clusters), queries only for the few vertices
-// whose hinted distance is the largest and for triangles the candidates do not cover.
-double hausdorff_upper_bound(const NodeMesh& input, const NodeMesh& output, const ImageHints& hints);
+// whose hinted distance is the largest and for triangles the candidates do not cover. A caller
+// that only needs the bound when it is at most `give_up` (model units) gets +infinity as soon
+// as the bound is known to exceed it: the same answer for its comparison, for less work.
+double hausdorff_upper_bound(const NodeMesh& input, const NodeMesh& output, const ImageHints& hints,
+                             double give_up = std::numeric_limits<double>::infinity());
 
 }  // namespace octolod::bake

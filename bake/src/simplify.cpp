@@ -2,6 +2,7 @@
 // choice between the seed's operator and the grid (seed 3.5, 4.4), with the error bound of the
 // result (seed 3.5.3).
 #include <cmath>
+#include <limits>
 #include <string>
 #include <utility>
 
@@ -12,6 +13,8 @@
 
 namespace octolod::bake {
 namespace {
+
+constexpr double kInfinity = std::numeric_limits<double>::infinity();
 
 Status check_mesh(const NodeMesh& mesh) {
   const std::size_t stride = mesh.layout.floats();
@@ -94,22 +97,25 @@ Result<SimplifyResult> simplify_node(const NodeMesh& input, const Bounds& cell,
     result.error_bound = hausdorff_upper_bound(node.mesh(), result.mesh);
     return result;
   }
-  auto grid_step = [&](const PreparedNode& node) {
+  // The step, its error bound +infinity when its error times triangles would exceed `max_cost`.
+  auto grid_step = [&](const PreparedNode& node, double max_cost) {
     ClusteredMesh clustered = options.target_triangles > 0 ? cluster_for_target(node, options.target_triangles)
                                                            : cluster_grid(node, options.grid_resolution);
     SimplifyResult step;
     step.mesh = std::move(clustered.mesh);
-    step.error_bound = hausdorff_upper_bound(node.mesh(), step.mesh, clustered.hints());
+    const auto triangles = static_cast<double>(step.mesh.triangle_count());
+    step.error_bound = hausdorff_upper_bound(node.mesh(), step.mesh, clustered.hints(),
+                                             triangles > 0.0 ? max_cost / triangles : kInfinity);
     return step;
   };
   const PreparedNode node = prepare_node(input, cell, options.lock_boundary, options.neighbours);
-  result = grid_step(node);
+  result = grid_step(node, kInfinity);
   // Below the root, a free border (the mesh's own, no neighbour shares it) is simplified where
   // that pays: the step is taken again with the border kept, and the free one stays when its
   // error times its triangles is the lower (a surface's error falls about like 1 / triangles).
-  // Kept, the border costs a triangle per edge; freed, its clusters are pulled onto it by the
-  // border quadrics from both sides of their cell, and a bent surface next to the border is
-  // flattened: on the 1M terrain the free border's steps had up to 2.5x the kept one's error at
+  // Kept, the border costs a triangle per edge; freed, a border cluster's representative is
+  // held on the border line by the border quadrics, and a bent surface beside the border is
+  // flattened up to it: on the 1M terrain the free border's steps had up to 2.5x the kept one's error at
   // the same count where the border was a few percent of the node's triangles, and half the
   // triangles at the same error where it was most of them (docs/benchmarks.md).
   if (options.lock_boundary && !node.free_border.empty()) {
@@ -117,7 +123,8 @@ Result<SimplifyResult> simplify_node(const NodeMesh& input, const Bounds& cell,
       return std::isinf(step.error_bound) ? step.error_bound
                                           : step.error_bound * static_cast<double>(step.mesh.triangle_count());
     };
-    SimplifyResult kept = grid_step(prepare_node(input, cell, true));
+    // (bounded only as far as it can win)
+    SimplifyResult kept = grid_step(prepare_node(input, cell, true), cost(result));
     if (cost(kept) <= cost(result)) result = std::move(kept);
   }
   return result;
