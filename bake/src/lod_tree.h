@@ -15,8 +15,8 @@
 //             streaming from it instead (streamed_leaf.h, merged_children), memory bounded by
 //             merge_bytes rather than by the model.
 //
-// Why the finest LODs that fit: every node keeps its outer boundary at the original resolution
-// (crack-freedom for any cut, simplify.h), so a uniform cut through many small nodes spends most
+// Why the finest LODs that fit: every node keeps the boundary it shares with other nodes at the
+// original resolution (crack-freedom for any cut, simplify.h), so a uniform cut through many small nodes spends most
 // of its triangles on locked boundary fans (on a 1M rock, 38% of a 10% cut's triangles and 60%
 // of a 1% cut's touched a locked edge when parents merged their children's second LODs). Merging
 // the finest LODs makes a parent's LOD 0 about twice a child's, so the nodes near the root hold
@@ -100,8 +100,9 @@ struct LodTreeOptions {
   std::uint32_t node_min_triangles = 1024;
   // The longest edge of any input triangle, model units: every node below the root keeps only
   // the boundary edges within a third of it of its cell's faces (LodOptions::neighbours), which
-  // are all it can share with other nodes; the mesh's own border deeper inside is simplified.
-  // Infinity (unknown): every node keeps its whole boundary.
+  // are all it can share with other nodes; the mesh's own border deeper inside is simplified
+  // where that pays (SimplifyOptions::neighbours). Infinity (unknown): every node keeps its
+  // whole boundary.
   double longest_input_edge = std::numeric_limits<double>::infinity();
   unsigned workers = 0;         // threads besides the caller; 0: the caller does all node work
   std::size_t queue_bytes = 0;  // leaf records waiting for a thread (one leaf always fits)
