@@ -115,9 +115,10 @@ Result<SimplifyResult> simplify_node(const NodeMesh& input, const Bounds& cell,
   // error times its triangles is the lower (a surface's error falls about like 1 / triangles).
   // Kept, the border costs a triangle per edge; freed, a border cluster's representative is
   // held on the border line by the border quadrics, and a bent surface beside the border is
-  // flattened up to it: on the 1M terrain the free border's steps had up to 2.5x the kept one's error at
-  // the same count where the border was a few percent of the node's triangles, and half the
-  // triangles at the same error where it was most of them (docs/benchmarks.md).
+  // flattened up to it. On the 1M terrain, freed everywhere, steps whose border was a few
+  // percent of their triangles had up to 2.5x the error at the same count; where it was a fifth
+  // or more, the free border's error times triangles was 0.65x the kept one's (geometric mean;
+  // docs/benchmarks.md). No share of border edges told the two apart.
   if (options.lock_boundary && !node.free_border.empty()) {
     auto cost = [](const SimplifyResult& step) {  // +infinity for an empty output (error +infinity)
       return std::isinf(step.error_bound) ? step.error_bound
