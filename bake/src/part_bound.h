@@ -23,8 +23,8 @@ std::uint32_t closest_triangle(const measure::TriangleBvh& bvh, const Vec3d& p);
 class PartBounder {
  public:
   // `output`: the output mesh's triangles (double corners), indexed as the candidates below;
-  // borrowed, must outlive the bounder. Keeps 80 bytes per triangle (normal, bounding sphere,
-  // edge signatures).
+  // borrowed, must outlive the bounder. Keeps 68 bytes per triangle (normal, bounding sphere,
+  // the triangles across its edges).
   explicit PartBounder(std::span<const Triangle3d> output);
 
   double distance2(const Vec3d& p, std::uint32_t triangle) const;
@@ -99,9 +99,11 @@ class PartBounder {
   std::span<const Triangle3d> output_;
   std::vector<Vec3d> normal_;    // per output triangle: twice its area times its unit normal
   std::vector<Sphere> sphere_;   // per output triangle: bounding_sphere, widened by a hair for rounding
-  // per output triangle and edge k (corner k to k + 1): signatures of the edge as it runs, and run
-  // backwards (the prism's cover proof looks for the triangle across an edge by them)
-  std::vector<std::array<std::uint32_t, 3>> edge_signature_, back_signature_;
+  // per output triangle and edge k (corner k to k + 1): the first other triangle that runs the
+  // edge backwards (corner positions equal), or kNone (the prism's cover proof looks for it among
+  // the pieces)
+  static constexpr std::uint32_t kNone = 0xFFFFFFFFu;
+  std::vector<std::array<std::uint32_t, 3>> across_;
 };
 
 }  // namespace octolod::bake
