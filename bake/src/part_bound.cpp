@@ -64,27 +64,27 @@ double side_of(const Point2& a, const Point2& b, const Point2& p, double on_line
   return std::abs(h) <= on_line ? 0.0 : h;
 }
 
-// The part of `polygon` left of the prism's side `line`, given side_of that line for each of
-// its corners in `h`.
-Polygon clip(const Polygon& polygon, const std::array<double, 9>& h, std::size_t line) {
+// `kept` = the part of `polygon` left of the prism's side `line`, given side_of that line for
+// each of its corners in `h`. (Into the caller's polygon: returned, it was copied back whole.)
+void clip(const Polygon& polygon, const std::array<double, 9>& h, std::size_t line, Polygon& kept) {
   const auto bit = static_cast<std::uint8_t>(1u << line);
-  Polygon kept;
+  std::size_t size = 0;
   for (std::size_t k = 0; k < polygon.size; ++k) {
     const std::size_t next = k + 1 == polygon.size ? 0 : k + 1;
     const Point2& p0 = polygon.corner[k];
     const Point2& p1 = polygon.corner[next];
     const double h0 = h[k], h1 = h[next];
     if (h0 >= 0.0) {
-      kept.on[kept.size] = static_cast<std::uint8_t>(polygon.on[k] | (h0 == 0.0 ? bit : 0u));
-      kept.corner[kept.size++] = p0;
+      kept.on[size] = static_cast<std::uint8_t>(polygon.on[k] | (h0 == 0.0 ? bit : 0u));
+      kept.corner[size++] = p0;
     }
     if ((h0 > 0.0 && h1 < 0.0) || (h0 < 0.0 && h1 > 0.0)) {
       const double t = h0 / (h0 - h1);
-      kept.on[kept.size] = static_cast<std::uint8_t>((polygon.on[k] & polygon.on[next]) | bit);
-      kept.corner[kept.size++] = {p0[0] + t * (p1[0] - p0[0]), p0[1] + t * (p1[1] - p0[1])};
+      kept.on[size] = static_cast<std::uint8_t>((polygon.on[k] & polygon.on[next]) | bit);
+      kept.corner[size++] = {p0[0] + t * (p1[0] - p0[0]), p0[1] + t * (p1[1] - p0[1])};
     }
   }
-  return kept;
+  kept.size = size;
 }
 
 // `candidates` with the triangles of `queries` nearest to `points` joined (sorted, distinct; held
@@ -220,43 +220,51 @@ bool PartBounder::Prism::offer(std::uint32_t candidate) {
   std::array<std::array<double, 9>, 3> side;  // of the part's corners: the first clip's sides
   bool empty = false, inside = true;
   for (std::size_t e = 0; e < 3 && !empty; ++e) {
-    for (std::size_t k = 0; k < 3; ++k) side[e][k] = side_of(corner[e], corner[(e + 1) % 3], part2d_[k], on_line);
+    const Point2 &from = corner[e], &to = corner[e + 1 == 3 ? 0 : e + 1];
+    for (std::size_t k = 0; k < 3; ++k) side[e][k] = side_of(from, to, part2d_[k], on_line);
     empty = side[e][0] < 0.0 && side[e][1] < 0.0 && side[e][2] < 0.0;
     inside = inside && side[e][0] >= 0.0 && side[e][1] >= 0.0 && side[e][2] >= 0.0;
   }
   if (empty) return false;
   // clipped by the sides whose lines cut into the part (the others keep all of it, and a piece
-  // side along them can only be the part's own); corner k of the part lies on its sides k - 1 and k
-  Polygon piece;  // only the corners in use written: zeroing all nine was 6% of this function's time
-  piece.corner[0] = part2d_[0], piece.corner[1] = part2d_[1], piece.corner[2] = part2d_[2];
-  piece.on[0] = kPartSide2 | kPartSide0, piece.on[1] = kPartSide0 | kPartSide1, piece.on[2] = kPartSide1 | kPartSide2;
-  piece.size = 3;
+  // side along them can only be the part's own); corner k of the part lies on its sides k - 1 and k.
+  // Each clip writes the other polygon.
+  Polygon polygons[2];  // only the corners in use written: zeroing all nine was 6% of this function's time
+  Polygon* piece = &polygons[0];
+  piece->corner[0] = part2d_[0], piece->corner[1] = part2d_[1], piece->corner[2] = part2d_[2];
+  piece->on[0] = kPartSide2 | kPartSide0, piece->on[1] = kPartSide0 | kPartSide1, piece->on[2] = kPartSide1 | kPartSide2;
+  piece->size = 3;
   bool clipped = false;
-  for (std::size_t e = 0; e < 3 && !inside && piece.size > 0; ++e) {
+  for (std::size_t e = 0; e < 3 && !inside && piece->size > 0; ++e) {
     if (!(side[e][0] < 0.0 || side[e][1] < 0.0 || side[e][2] < 0.0)) continue;
-    if (clipped)
-      for (std::size_t k = 0; k < piece.size; ++k) side[e][k] = side_of(corner[e], corner[(e + 1) % 3], piece.corner[k], on_line);
-    piece = clip(piece, side[e], e);
+    if (clipped) {
+      const Point2 &from = corner[e], &to = corner[e + 1 == 3 ? 0 : e + 1];
+      for (std::size_t k = 0; k < piece->size; ++k) side[e][k] = side_of(from, to, piece->corner[k], on_line);
+    }
+    Polygon* kept = piece == &polygons[0] ? &polygons[1] : &polygons[0];
+    clip(*piece, side[e], e, *kept);
+    piece = kept;
     clipped = true;
   }
-  if (piece.size < 3) return false;
+  const Polygon& cut = *piece;
+  if (cut.size < 3) return false;
   if (piece_count_ == kMaxPieces) {  // never seen: a part lies over a few output triangles
     settled_ = true;
     return true;
   }
   unsigned open = 0;
-  for (std::size_t k = 0; k < piece.size; ++k) {
-    const unsigned along = piece.on[k] & piece.on[k + 1 == piece.size ? 0 : k + 1];
+  for (std::size_t k = 0; k < cut.size; ++k) {
+    const unsigned along = cut.on[k] & cut.on[k + 1 == cut.size ? 0 : k + 1];
     if ((along & kPartSides) == 0) open |= along;
   }
   piece_triangle_[piece_count_] = candidate;
   piece_open_[piece_count_++] = open;
-  for (std::size_t k = 1; k + 1 < piece.size; ++k) covered_ += left_of(piece.corner[0], piece.corner[k], piece.corner[k + 1]);
+  for (std::size_t k = 1; k + 1 < cut.size; ++k) covered_ += left_of(cut.corner[0], cut.corner[k], cut.corner[k + 1]);
   // distance along the part's normal to the candidate's plane: affine in the plane's coordinates
   const double along0 = dot(sub(part_[0], tri[0]), normal) / facing;
   const double along_x = dot(x_axis_, normal) / facing, along_y = dot(y_axis_, normal) / facing;
-  for (std::size_t k = 0; k < piece.size; ++k) {
-    const Point2& q = piece.corner[k];
+  for (std::size_t k = 0; k < cut.size; ++k) {
+    const Point2& q = cut.corner[k];
     const double along = along0 + q[0] * along_x + q[1] * along_y;
     if (along * along <= enough2_) {
       worst2_ = std::max(worst2_, along * along);
