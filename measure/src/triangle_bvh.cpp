@@ -197,23 +197,30 @@ void TriangleBvh::build(std::vector<Triangle> triangles) {
         bin_box[b].extend(boxes[r]);
         ++bin_count[b];
       }
-      // sweep from the right, then from the left
+      // sweep from the right, then from the left. An empty bin changes nothing: the cost to its
+      // right is the next one's, and the split after it costs what the split before it did (the
+      // earlier one wins a tie), so it is skipped (a node of tens of triangles leaves most empty).
       std::array<float, kBins> right_cost{};
       Box acc;
       std::uint32_t acc_count = 0;
       for (std::size_t b = kBins - 1; b > 0; --b) {
+        if (bin_count[b] == 0) {
+          right_cost[b] = b + 1 < kBins ? right_cost[b + 1] : 0.0f;
+          continue;
+        }
         acc.extend(bin_box[b]);
         acc_count += bin_count[b];
-        right_cost[b] = acc_count ? acc.half_area() * static_cast<float>(acc_count) : 0.0f;
+        right_cost[b] = acc.half_area() * static_cast<float>(acc_count);
       }
       float best_cost = std::numeric_limits<float>::infinity();
       std::size_t best_split = 0;
       acc = Box{};
       acc_count = 0;
       for (std::size_t b = 0; b + 1 < kBins; ++b) {
+        if (bin_count[b] == 0) continue;
         acc.extend(bin_box[b]);
         acc_count += bin_count[b];
-        if (acc_count == 0 || acc_count == count) continue;
+        if (acc_count == count) continue;
         const float cost = acc.half_area() * static_cast<float>(acc_count) + right_cost[b + 1];
         if (cost < best_cost) best_cost = cost, best_split = b + 1;
       }
