@@ -97,8 +97,11 @@ inline glm::vec3 closest_barycentric(glm::vec3 p, glm::vec3 a, glm::vec3 b, glm:
   return {tca, 0.0f, 1.0f - tca};
 }
 
+// A node to build: its triangles refs[begin, end) and the union of their boxes (its parent's
+// SAH sweep has it: min and max are exact, so the union of the bins' boxes is that box).
 struct BuildTask {
   std::uint32_t node, begin, end, depth;
+  Box bounds;
 };
 
 }  // namespace
@@ -137,24 +140,26 @@ void TriangleBvh::build(std::vector<Triangle> triangles) {
   }
   std::vector<std::uint32_t> refs(n);
   for (std::uint32_t t = 0; t < n; ++t) refs[t] = t;
+  // the task for refs[begin, end) where no sweep gave its bounds: the root and the children of
+  // the splits without one (coincident centroids, the object median)
+  auto task_of = [&](std::uint32_t node, std::uint32_t begin, std::uint32_t end, std::uint32_t depth) {
+    BuildTask task{node, begin, end, depth, {}};
+    for (std::uint32_t i = begin; i < end; ++i) task.bounds.extend(boxes[refs[i]]);
+    return task;
+  };
+  std::vector<std::uint8_t> bin(n);  // per triangle: its bin in the last node binned
 
   nodes_.clear();
   nodes_.reserve(std::size_t{n} / 2 + 1);
   nodes_.push_back({});
-  std::vector<BuildTask> tasks{{0, 0, n, 0}};
+  std::vector<BuildTask> tasks{task_of(0, 0, n, 0)};
   while (!tasks.empty()) {
-    BuildTask task = tasks.back();
+    const BuildTask task = tasks.back();
     tasks.pop_back();
 
-    // bounds of the node and of its centroids
-    Box bounds, centroid_bounds;
-    for (std::uint32_t i = task.begin; i < task.end; ++i) {
-      bounds.extend(boxes[refs[i]]);
-      centroid_bounds.extend(centroids[refs[i]]);
-    }
     Node& node = nodes_[task.node];
-    node.min = bounds.min;
-    node.max = bounds.max;
+    node.min = task.bounds.min;
+    node.max = task.bounds.max;
     const std::uint32_t count = task.end - task.begin;
     auto make_leaf = [&] {
       node.first = task.begin;
@@ -165,6 +170,8 @@ void TriangleBvh::build(std::vector<Triangle> triangles) {
       continue;
     }
 
+    Box centroid_bounds;
+    for (std::uint32_t i = task.begin; i < task.end; ++i) centroid_bounds.extend(centroids[refs[i]]);
     glm::vec3 extent = centroid_bounds.max - centroid_bounds.min;
     int axis = extent.x >= extent.y && extent.x >= extent.z ? 0 : (extent.y >= extent.z ? 1 : 2);
     if (!(extent[axis] > 0.0f)) {
@@ -176,24 +183,23 @@ void TriangleBvh::build(std::vector<Triangle> triangles) {
       std::uint32_t left = node.first;
       nodes_.push_back({});
       nodes_.push_back({});
-      tasks.push_back({left, task.begin, mid, task.depth + 1});
-      tasks.push_back({left + 1, mid, task.end, task.depth + 1});
+      tasks.push_back(task_of(left, task.begin, mid, task.depth + 1));
+      tasks.push_back(task_of(left + 1, mid, task.end, task.depth + 1));
       continue;
     }
 
     std::uint32_t mid = task.begin;
+    Box below, above;  // the bounds of the SAH split's two sides
     if (task.depth < kSahDepth) {
       // binned SAH along the widest centroid axis (all three cost the bake's small, many builds
       // 3.5% of its time and made no query measurably faster: docs/benchmarks.md)
       std::array<Box, kBins> bin_box;
       std::array<std::uint32_t, kBins> bin_count{};
       const float lo = centroid_bounds.min[axis], scale = static_cast<float>(kBins) / extent[axis];
-      auto bin_of = [&](std::uint32_t r) {
-        return static_cast<std::size_t>(std::min(kBins - 1, static_cast<int>((centroids[r][axis] - lo) * scale)));
-      };
       for (std::uint32_t i = task.begin; i < task.end; ++i) {
         const std::uint32_t r = refs[i];
-        const std::size_t b = bin_of(r);
+        const auto b = static_cast<std::size_t>(std::min(kBins - 1, static_cast<int>((centroids[r][axis] - lo) * scale)));
+        bin[r] = static_cast<std::uint8_t>(b);
         bin_box[b].extend(boxes[r]);
         ++bin_count[b];
       }
@@ -201,16 +207,19 @@ void TriangleBvh::build(std::vector<Triangle> triangles) {
       // right is the next one's, and the split after it costs what the split before it did (the
       // earlier one wins a tie), so it is skipped (a node of tens of triangles leaves most empty).
       std::array<float, kBins> right_cost{};
+      std::array<Box, kBins> right_box;  // the union of bins b and up
       Box acc;
       std::uint32_t acc_count = 0;
       for (std::size_t b = kBins - 1; b > 0; --b) {
         if (bin_count[b] == 0) {
           right_cost[b] = b + 1 < kBins ? right_cost[b + 1] : 0.0f;
+          right_box[b] = acc;
           continue;
         }
         acc.extend(bin_box[b]);
         acc_count += bin_count[b];
         right_cost[b] = acc.half_area() * static_cast<float>(acc_count);
+        right_box[b] = acc;
       }
       float best_cost = std::numeric_limits<float>::infinity();
       std::size_t best_split = 0;
@@ -222,14 +231,20 @@ void TriangleBvh::build(std::vector<Triangle> triangles) {
         acc_count += bin_count[b];
         if (acc_count == count) continue;
         const float cost = acc.half_area() * static_cast<float>(acc_count) + right_cost[b + 1];
-        if (cost < best_cost) best_cost = cost, best_split = b + 1;
+        if (cost < best_cost) best_cost = cost, best_split = b + 1, below = acc;
       }
       if (best_split > 0) {
         auto it = std::partition(refs.begin() + task.begin, refs.begin() + task.end,
-                                 [&](std::uint32_t r) { return bin_of(r) < best_split; });
+                                 [&](std::uint32_t r) { return bin[r] < best_split; });
         mid = static_cast<std::uint32_t>(it - refs.begin());
+        above = right_box[best_split];
       }
     }
+    node.first = static_cast<std::uint32_t>(nodes_.size());
+    node.count = 0;
+    std::uint32_t left = node.first;
+    nodes_.push_back({});
+    nodes_.push_back({});
     if (mid == task.begin || mid == task.end) {
       // object median along the widest centroid axis
       mid = task.begin + count / 2;
@@ -237,14 +252,12 @@ void TriangleBvh::build(std::vector<Triangle> triangles) {
                        [&](std::uint32_t l, std::uint32_t r) {
                          return centroids[l][axis] < centroids[r][axis];
                        });
+      tasks.push_back(task_of(left, task.begin, mid, task.depth + 1));
+      tasks.push_back(task_of(left + 1, mid, task.end, task.depth + 1));
+    } else {
+      tasks.push_back({left, task.begin, mid, task.depth + 1, below});
+      tasks.push_back({left + 1, mid, task.end, task.depth + 1, above});
     }
-    node.first = static_cast<std::uint32_t>(nodes_.size());
-    node.count = 0;
-    std::uint32_t left = node.first;
-    nodes_.push_back({});
-    nodes_.push_back({});
-    tasks.push_back({left, task.begin, mid, task.depth + 1});
-    tasks.push_back({left + 1, mid, task.end, task.depth + 1});
   }
 
   // triangles in leaf order, so a leaf reads one contiguous run
