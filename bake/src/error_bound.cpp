@@ -151,7 +151,7 @@ double hausdorff_upper_bound(const NodeMesh& input, const NodeMesh& output, cons
   // input triangle's bound against its image alone (the max of its corners' distances to it),
   // the first of its single candidates below.
   std::vector<std::uint32_t> vertex_best(input.vertex_count(), kNone);
-  std::vector<double> vertex_best2(input.vertex_count(), kInfinity);
+  std::vector<double> vertex_best2(input.vertex_count(), kInfinity);  // distance2 to vertex_best (once it has one)
   auto offer = [&](std::uint32_t v, std::uint32_t triangle) {
     if (vertex_best[v] == triangle) return vertex_best2[v];  // the image of a triangle next to it, measured
     const double d2 = bounder.distance2(vertex_position(input, v), triangle);
@@ -258,7 +258,13 @@ double hausdorff_upper_bound(const NodeMesh& input, const NodeMesh& output, cons
     const Triangle p = corners(input, t);
     const std::uint32_t image = image_of(t);
     const auto others_end = std::remove_copy(few.begin(), few.end(), others.begin(), image);
-    const double best2 = std::min(image_bound2[t], bounder.single_bound2(p, {others.data(), others_end}, total2));
+    // each corner's distance to its nearest triangle so far, one of the others, is known
+    const std::uint32_t* corner = &input.indices[3 * t];
+    const std::array<PartBounder::Measured, 3> measured{{{vertex_best[corner[0]], vertex_best2[corner[0]]},
+                                                         {vertex_best[corner[1]], vertex_best2[corner[1]]},
+                                                         {vertex_best[corner[2]], vertex_best2[corner[2]]}}};
+    const double best2 =
+        std::min(image_bound2[t], bounder.single_bound2(p, {others.data(), others_end}, total2, &measured));
     if (best2 == kInfinity) {
       unresolved.push_back(static_cast<std::uint32_t>(t));
       continue;

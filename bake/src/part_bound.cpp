@@ -155,13 +155,15 @@ double PartBounder::nearest2(const Vec3d& p, std::span<const std::uint32_t> cand
 }
 
 double PartBounder::single_bound2(const Triangle3d& part, std::span<const std::uint32_t> candidates,
-                                  double settled2) const {
+                                  double settled2, const std::array<Measured, 3>* measured) const {
   double best2 = kInfinity;
   for (std::uint32_t candidate : candidates) {
     double worst2 = 0.0;
-    for (const Vec3d& c : part) {
+    for (std::size_t k = 0; k < 3; ++k) {
+      const Vec3d& c = part[k];
       if (near_corner(c, output_[candidate], std::max(worst2, settled2))) continue;
-      worst2 = std::max(worst2, distance2(c, candidate));
+      const bool known = measured != nullptr && (*measured)[k].triangle == candidate;
+      worst2 = std::max(worst2, known ? (*measured)[k].distance2 : distance2(c, candidate));
       if (worst2 >= best2) break;
     }
     best2 = std::min(best2, worst2);

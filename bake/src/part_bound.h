@@ -31,13 +31,21 @@ class PartBounder {
   // min over `candidates` of distance2(p, .); +infinity when there is none.
   double nearest2(const Vec3d& p, std::span<const std::uint32_t> candidates) const;
 
+  // A corner's distance2 to one output triangle, measured before.
+  struct Measured {
+    std::uint32_t triangle;
+    double distance2;
+  };
+
   // One piece: min over the candidates of the max over the part's corners of the distance to it.
   // Tight where the part lies over one output triangle; where it reaches across an output edge
   // it is about how far it reaches. A candidate within `settled2` ends the search (the result is
   // then only known to be at most `settled2`), and a corner within that, or within the
   // candidate's worst so far, of one of the candidate's corners is not measured (it cannot
-  // raise either). +infinity without candidates.
-  double single_bound2(const Triangle3d& part, std::span<const std::uint32_t> candidates, double settled2 = 0.0) const;
+  // raise either); nor is corner k against measured[k].triangle (when given). +infinity without
+  // candidates.
+  double single_bound2(const Triangle3d& part, std::span<const std::uint32_t> candidates, double settled2 = 0.0,
+                       const std::array<Measured, 3>* measured = nullptr) const;
 
   // The prism pieces: the prism over each candidate facing like the part, along the part's
   // normal, cuts from it the convex piece that lies straight above or below that candidate, and
