@@ -128,6 +128,7 @@ PartBounder::PartBounder(std::span<const Triangle3d> output) : output_(output) {
     const Sphere sphere = bounding_sphere(tri[0], tri[1], tri[2]);
     sphere_.push_back({sphere.center, sphere.radius * (1.0 + 1e-9)});
   }
+  // each edge's first other triangle that runs it backwards: equal positions, equal signatures
   across_.assign(output.size(), {kNone, kNone, kNone});
   for (std::size_t edge = 0; edge < edges; ++edge) {
     const std::size_t t = edge / 3, k = edge % 3;
