@@ -3,6 +3,7 @@
 #include "clustered_output.h"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 
 namespace octolod::bake {
@@ -27,7 +28,8 @@ void InputDistances::gather() {
     for_clusters_of(t, [&](std::uint32_t c) { triangle_[fill[c]++] = static_cast<std::uint32_t>(t); });
 
   // bounding spheres in float: the centre rounded, the radius widened by the rounding's shift
-  // and rounded up, so that they still hold the corners
+  // and rounded up (to the next float: the radius is finite and not negative), so that they
+  // still hold the corners
   sphere_.resize(triangles);
   for (std::size_t t = 0; t < triangles; ++t) {
     const std::uint32_t* v = &input.indices[3 * t];
@@ -35,8 +37,10 @@ void InputDistances::gather() {
     FloatSphere& sphere = sphere_[t];
     for (std::size_t i = 0; i < 3; ++i) sphere.center[i] = static_cast<float>(exact.center[i]);
     const Vec3d shift = sub(exact.center, {sphere.center[0], sphere.center[1], sphere.center[2]});
-    sphere.radius = std::nextafter(static_cast<float>(exact.radius + std::sqrt(dot(shift, shift))), INFINITY);
+    const auto radius = static_cast<float>(exact.radius + std::sqrt(dot(shift, shift)));
+    sphere.radius = std::bit_cast<float>(std::bit_cast<std::uint32_t>(radius) + 1);
   }
+  met_in_.assign(triangles, 0);
 }
 
 void InputDistances::nearest2(std::span<const std::uint32_t> clusters, std::span<const Vec3d> points,
@@ -44,15 +48,14 @@ void InputDistances::nearest2(std::span<const std::uint32_t> clusters, std::span
   if (!gathered_) gather();
   const NodeMesh& input = out_.input;
   std::fill(distance2.begin(), distance2.end(), INFINITY);
+  ++query_;
   for (std::size_t q = 0; q < clusters.size(); ++q)
     for (std::uint32_t i = offset_[clusters[q]]; i < offset_[clusters[q] + 1]; ++i) {
-      const std::uint32_t* v = &input.indices[3 * std::size_t{triangle_[i]}];
-      bool seen = false;  // at an earlier cluster of the list
-      for (std::size_t r = 0; r < q; ++r)
-        for (std::size_t k = 0; k < 3; ++k) seen = seen || out_.vertex_cluster[v[k]] == clusters[r];
-      if (seen) continue;
+      const std::uint32_t t = triangle_[i];
+      if (met_in_[t] == query_) continue;  // at an earlier cluster of the list
+      met_in_[t] = query_;
       // a triangle whose sphere is farther from every point than its best so far cannot lower it
-      const FloatSphere& sphere = sphere_[triangle_[i]];
+      const FloatSphere& sphere = sphere_[t];
       bool reaches = false;
       for (std::size_t p = 0; p < points.size() && !reaches; ++p) {
         const Vec3d d = sub(points[p], {sphere.center[0], sphere.center[1], sphere.center[2]});
@@ -60,6 +63,7 @@ void InputDistances::nearest2(std::span<const std::uint32_t> clusters, std::span
         reaches = gap <= 0.0 || gap * gap < distance2[p];
       }
       if (!reaches) continue;
+      const std::uint32_t* v = &input.indices[3 * std::size_t{t}];
       const Vec3d q0 = vertex_position(input, v[0]), q1 = vertex_position(input, v[1]), q2 = vertex_position(input, v[2]);
       for (std::size_t p = 0; p < points.size(); ++p)
         distance2[p] = std::min(distance2[p], point_triangle_distance2(points[p], q0, q1, q2));

@@ -53,6 +53,11 @@ class InputDistances {
     float radius;
   };
   std::vector<FloatSphere> sphere_;  // per input triangle: holds its corners (skips far triangles)
+  // per input triangle: the number of the last query that met it (queries count from 1), so
+  // that a triangle at several of a query's clusters is measured once without comparing its
+  // corners' clusters with the earlier ones of the list
+  std::vector<std::uint32_t> met_in_;
+  std::uint32_t query_ = 0;
 };
 
 }  // namespace octolod::bake
