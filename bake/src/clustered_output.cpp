@@ -43,31 +43,57 @@ void InputDistances::gather() {
   met_in_.assign(triangles, 0);
 }
 
-void InputDistances::nearest2(std::span<const std::uint32_t> clusters, std::span<const Vec3d> points,
-                              std::span<double> distance2) {
+template <class F>
+void InputDistances::for_each_triangle(std::span<const std::uint32_t> clusters, const F& f) {
   if (!gathered_) gather();
-  const NodeMesh& input = out_.input;
-  std::fill(distance2.begin(), distance2.end(), INFINITY);
   ++query_;
-  for (std::size_t q = 0; q < clusters.size(); ++q)
-    for (std::uint32_t i = offset_[clusters[q]]; i < offset_[clusters[q] + 1]; ++i) {
+  for (const std::uint32_t c : clusters)
+    for (std::uint32_t i = offset_[c]; i < offset_[c + 1]; ++i) {
       const std::uint32_t t = triangle_[i];
       if (met_in_[t] == query_) continue;  // at an earlier cluster of the list
       met_in_[t] = query_;
-      // a triangle whose sphere is farther from every point than its best so far cannot lower it
-      const FloatSphere& sphere = sphere_[t];
-      bool reaches = false;
-      for (std::size_t p = 0; p < points.size() && !reaches; ++p) {
-        const Vec3d d = sub(points[p], {sphere.center[0], sphere.center[1], sphere.center[2]});
-        const double gap = std::sqrt(dot(d, d)) - sphere.radius;
-        reaches = gap <= 0.0 || gap * gap < distance2[p];
-      }
-      if (!reaches) continue;
-      const std::uint32_t* v = &input.indices[3 * std::size_t{t}];
-      const Vec3d q0 = vertex_position(input, v[0]), q1 = vertex_position(input, v[1]), q2 = vertex_position(input, v[2]);
-      for (std::size_t p = 0; p < points.size(); ++p)
-        distance2[p] = std::min(distance2[p], point_triangle_distance2(points[p], q0, q1, q2));
+      f(t);
     }
+}
+
+inline bool InputDistances::may_be_nearer(std::uint32_t t, const Vec3d& p, double distance2) const {
+  const FloatSphere& sphere = sphere_[t];
+  const Vec3d d = sub(p, {sphere.center[0], sphere.center[1], sphere.center[2]});
+  const double gap = std::sqrt(dot(d, d)) - sphere.radius;
+  return gap <= 0.0 || gap * gap < distance2;
+}
+
+inline std::array<Vec3d, 3> InputDistances::corners(std::uint32_t t) const {
+  const std::uint32_t* v = &out_.input.indices[3 * std::size_t{t}];
+  return {vertex_position(out_.input, v[0]), vertex_position(out_.input, v[1]), vertex_position(out_.input, v[2])};
+}
+
+void InputDistances::nearest2(std::span<const std::uint32_t> clusters, std::span<const Vec3d> points,
+                              std::span<double> distance2) {
+  std::fill(distance2.begin(), distance2.end(), INFINITY);
+  for_each_triangle(clusters, [&](std::uint32_t t) {
+    const auto [a, b, c] = corners(t);
+    for (std::size_t p = 0; p < points.size(); ++p)
+      if (may_be_nearer(t, points[p], distance2[p]))
+        distance2[p] = std::min(distance2[p], point_triangle_distance2(points[p], a, b, c));
+  });
+}
+
+bool InputDistances::nearer(std::span<const std::uint32_t> clusters, const Vec3d& candidate, const Vec3d& current,
+                            double share) {
+  // `current` exactly; `candidate` below the bound share x current's best so far, which only
+  // falls (a product with a share is monotone): a triangle that brings it below the final bound
+  // is never skipped, and the others do not change the answer
+  double current2 = INFINITY, candidate2 = INFINITY;
+  for_each_triangle(clusters, [&](std::uint32_t t) {
+    const bool lowers_current = may_be_nearer(t, current, current2);
+    const bool lowers_candidate = may_be_nearer(t, candidate, std::min(candidate2, share * current2));
+    if (!lowers_current && !lowers_candidate) return;
+    const auto [a, b, c] = corners(t);
+    if (lowers_current) current2 = std::min(current2, point_triangle_distance2(current, a, b, c));
+    if (lowers_candidate) candidate2 = std::min(candidate2, point_triangle_distance2(candidate, a, b, c));
+  });
+  return candidate2 < share * current2;
 }
 
 }  // namespace octolod::bake

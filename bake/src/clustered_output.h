@@ -41,8 +41,21 @@ class InputDistances {
   // counted once) of the squared distance from points[i] to it; +infinity when there are none.
   void nearest2(std::span<const std::uint32_t> clusters, std::span<const Vec3d> points, std::span<double> distance2);
 
+  // Whether nearest2 of `candidate` is below `share` (>= 0) times nearest2 of `current`, over
+  // the same triangles: the answer of comparing the two, but `candidate` is measured only
+  // against the triangles that may still bring it below share times the best of `current` so far.
+  bool nearer(std::span<const std::uint32_t> clusters, const Vec3d& candidate, const Vec3d& current, double share);
+
  private:
   void gather();
+  // f(t) for every input triangle t with a corner in one of `clusters`, once each, in the list's
+  // order; gathers first.
+  template <class F>
+  void for_each_triangle(std::span<const std::uint32_t> clusters, const F& f);
+  // False when triangle t's sphere is no nearer to p than squared distance `distance2`: then
+  // neither is the triangle.
+  bool may_be_nearer(std::uint32_t t, const Vec3d& p, double distance2) const;
+  std::array<Vec3d, 3> corners(std::uint32_t t) const;
 
   const ClusteredOutput& out_;
   bool gathered_ = false;

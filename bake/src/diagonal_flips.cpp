@@ -79,14 +79,10 @@ std::size_t flip_diagonals(InputDistances& input, std::vector<std::uint32_t>& co
     };
     if (!(faces_like_the_pair(m0) && faces_like_the_pair(m1))) continue;
 
-    // squared distances of the diagonals' midpoints to the input triangles at the quad's four
-    // clusters
+    // the diagonals' midpoints by their squared distances to the input triangles at the quad's
+    // four clusters
     const std::array<std::uint32_t, 4> quad{out.wedge_cluster[a], out.wedge_cluster[b], cc, cd};
-    const std::array<Vec3d, 2> mids{midpoint(pa, pb), midpoint(pc, pd)};
-    std::array<double, 2> distance2;
-    input.nearest2(quad, mids, distance2);
-    const double before = distance2[0], after = distance2[1];
-    if (!(after < (1.0 - kMinGain) * before)) continue;
+    if (!input.nearer(quad, midpoint(pc, pd), midpoint(pa, pb), 1.0 - kMinGain)) continue;
 
     corners[3 * t0] = a, corners[3 * t0 + 1] = d, corners[3 * t0 + 2] = c;
     corners[3 * t1] = b, corners[3 * t1 + 1] = c, corners[3 * t1 + 2] = d;
