@@ -195,9 +195,15 @@ Clustering clustering_from_keys(const std::vector<std::uint64_t>& keys, const Gr
 // cluster's position quadric (add_plane_quadrics, as build_clustered_mesh sums them) at its
 // minimizer nearest the cluster's mean: the mean squared distance of its surface to the flat
 // piece that replaces it, large where the surface bends within the cell. Locked clusters and clusters of one vertex (nothing to halve) are left out; equal
-// errors in key order.
-std::vector<std::uint32_t> clusters_by_error(const PreparedNode& node, const std::vector<std::uint32_t>& cluster,
-                                             const std::vector<std::uint64_t>& distinct) {
+// errors in key order. With the quadrics and (for the unlocked clusters of more than one
+// vertex) their minimizers, which the clusters left whole keep.
+struct HalvingOrder {
+  std::vector<std::uint32_t> order;
+  std::vector<double> quadric;
+  std::vector<double> minimizer;
+};
+HalvingOrder clusters_by_error(const PreparedNode& node, const std::vector<std::uint32_t>& cluster,
+                               const std::vector<std::uint64_t>& distinct) {
   const std::size_t stride = node.mesh().layout.floats();
   const std::size_t count = distinct.size();
   std::vector<std::uint8_t> unlocked(cluster.size());
@@ -214,19 +220,21 @@ std::vector<std::uint32_t> clusters_by_error(const PreparedNode& node, const std
     ++members[cluster[v]];
   }
   std::vector<std::pair<double, std::uint32_t>> ranked;  // (-error per area, cluster)
+  std::vector<double> minimizer(count * 3);
   for (std::uint32_t c = 0; c < count; ++c) {
-    if ((distinct[c] & kLockedKey) || members[c] <= 1 || !(area[c] > 0.0)) continue;
-    double mean[3], x[3];
+    if ((distinct[c] & kLockedKey) || members[c] <= 1) continue;
+    double mean[3];
+    double* x = &minimizer[c * 3];
     for (std::size_t i = 0; i < 3; ++i) mean[i] = sum[c * 3 + i] / members[c];
     minimize_quadric(3, &quadric[c * q3], mean, x);
-    ranked.push_back({-std::max(0.0, evaluate_quadric(3, &quadric[c * q3], x)) / area[c], c});
+    if (area[c] > 0.0) ranked.push_back({-std::max(0.0, evaluate_quadric(3, &quadric[c * q3], x)) / area[c], c});
   }
   std::sort(ranked.begin(), ranked.end(), [&distinct](const auto& a, const auto& b) {
     return a.first != b.first ? a.first < b.first : distinct[a.second] < distinct[b.second];
   });
   std::vector<std::uint32_t> order(ranked.size());
   for (std::size_t r = 0; r < ranked.size(); ++r) order[r] = ranked[r].second;
-  return order;
+  return {std::move(order), std::move(quadric), std::move(minimizer)};
 }
 
 }  // namespace
@@ -334,7 +342,7 @@ Clustering adaptive_grid_clustering(const PreparedNode& node, std::size_t target
     if (!(key & kLockedKey)) key |= kFineKey;
   const auto [coarse_id, coarse_distinct] = dense_ids(coarse_keys, false);
   const std::vector<std::uint32_t> fine_id = dense_ids(fine_keys, false).first;
-  const std::vector<std::uint32_t> order = clusters_by_error(node, coarse_id, coarse_distinct);
+  const auto [order, coarse_quadric, coarse_minimizer] = clusters_by_error(node, coarse_id, coarse_distinct);
   std::vector<std::uint32_t> rank(coarse_distinct.size(), UINT32_MAX);
   for (std::size_t r = 0; r < order.size(); ++r) rank[order[r]] = static_cast<std::uint32_t>(r);
   // cluster ids with the first `halved_count` clusters of `order` halved (ids past the coarse
@@ -369,7 +377,24 @@ Clustering adaptive_grid_clustering(const PreparedNode& node, std::size_t target
   }
   for (std::size_t v = 0; v < fine_keys.size(); ++v)
     if (rank[coarse_id[v]] >= feasible) fine_keys[v] = coarse_keys[v];
-  return clustering_from_keys(fine_keys, coarse, fine);
+  Clustering clustering = clustering_from_keys(fine_keys, coarse, fine);
+  // the coarse clusters left whole come first (in key order) and have the vertices they had in
+  // clusters_by_error: its quadrics and minimizers
+  std::vector<std::uint32_t> coarse_of;  // per whole coarse cluster, its coarse id
+  for (std::size_t v = 0; v < fine_keys.size(); ++v) {
+    if (rank[coarse_id[v]] < feasible || (fine_keys[v] & kLockedKey)) continue;
+    const std::uint32_t c = clustering.of_vertex[v];
+    if (c >= coarse_of.size()) coarse_of.resize(c + 1);
+    coarse_of[c] = coarse_id[v];
+  }
+  constexpr std::size_t q3 = quadric_doubles(3);
+  clustering.quadric.reserve(coarse_of.size() * q3);
+  clustering.minimizer.reserve(coarse_of.size() * 3);
+  for (const std::uint32_t c : coarse_of) {
+    clustering.quadric.insert(clustering.quadric.end(), &coarse_quadric[c * q3], &coarse_quadric[c * q3] + q3);
+    clustering.minimizer.insert(clustering.minimizer.end(), &coarse_minimizer[c * 3], &coarse_minimizer[c * 3] + 3);
+  }
+  return clustering;
 }
 
 }  // namespace octolod::bake

@@ -215,8 +215,9 @@ void finish_attributes(VertexLayout layout, const double* fallback_normal, doubl
 }
 
 void place_representative(const double* quadric, const double* mean, const ClampBox& box,
-                          const double* best_vertex, double* x) {
-  minimize_quadric(3, quadric, mean, x);
+                          const double* best_vertex, double* x, const double* minimizer) {
+  if (minimizer) std::copy(minimizer, minimizer + 3, x);
+  else minimize_quadric(3, quadric, mean, x);
   pull_into_box(mean, box, x);
   if (best_vertex[3] < evaluate_quadric(3, quadric, x)) std::copy(best_vertex, best_vertex + 3, x);
 }
@@ -295,12 +296,16 @@ ClusteredMesh build_clustered_mesh(const NodeMesh& mesh, std::span<const std::ar
   auto solved = [&](std::uint32_t v) { return !locked(v) && cluster_vertices[cluster[v]] > 1; };
 
   // position quadrics: every triangle's area-weighted plane quadric added to the cluster of each
-  // of its corners that is solved
+  // of its corners that is solved, unless the clustering has the cluster's
   const std::size_t q3 = quadric_doubles(3);
+  const std::size_t known_quadrics = clustering.quadric.size() / q3;
   std::vector<std::uint8_t> solved_vertex(vertex_count);
-  for (std::uint32_t v = 0; v < vertex_count; ++v) solved_vertex[v] = solved(v);
-  std::vector<double> cluster_quadric(clustering.count * q3, 0.0);
-  add_plane_quadrics(mesh, face_normal, cluster, solved_vertex, origin, cluster_quadric.data(), nullptr, free_border);
+  for (std::uint32_t v = 0; v < vertex_count; ++v) solved_vertex[v] = solved(v) && cluster[v] >= known_quadrics;
+  std::vector<double> summed_quadric(clustering.count * q3, 0.0);
+  add_plane_quadrics(mesh, face_normal, cluster, solved_vertex, origin, summed_quadric.data(), nullptr, free_border);
+  auto cluster_quadric = [&](std::uint32_t c) {
+    return c < known_quadrics ? &clustering.quadric[c * q3] : &summed_quadric[c * q3];
+  };
   auto triangle_area = [&](std::size_t t) {
     const std::array<double, 3>& fn = face_normal[t];
     return 0.5 * std::sqrt(fn[0] * fn[0] + fn[1] * fn[1] + fn[2] * fn[2]);
@@ -318,7 +323,7 @@ ClusteredMesh build_clustered_mesh(const NodeMesh& mesh, std::span<const std::ar
     double x[kMaxQuadricDim];
     local_vertex(v, x);
     double* best = &vertex_candidate[cluster[v] * 4];  // position, then its error
-    const double error = evaluate_quadric(3, &cluster_quadric[cluster[v] * q3], x);
+    const double error = evaluate_quadric(3, cluster_quadric(cluster[v]), x);
     if (error < best[3]) std::copy(x, x + 3, best), best[3] = error;
   }
   std::vector<float> wedge_record(wedge_count * stride);
@@ -327,8 +332,8 @@ ClusteredMesh build_clustered_mesh(const NodeMesh& mesh, std::span<const std::ar
     if (clustering.locked[c] || cluster_vertices[c] <= 1) continue;
     double mean[3];
     for (int i = 0; i < 3; ++i) mean[i] = cluster_sum[c * 3 + static_cast<std::size_t>(i)] / cluster_vertices[c];
-    place_representative(&cluster_quadric[c * q3], mean, clustering.box[c], &vertex_candidate[c * 4],
-                         &cluster_position[c * 3]);
+    place_representative(cluster_quadric(c), mean, clustering.box[c], &vertex_candidate[c * 4],
+                         &cluster_position[c * 3], c < known_quadrics ? &clustering.minimizer[c * 3] : nullptr);
   }
 
   // attribute quadrics, once the positions are known: every triangle's generalized quadric

@@ -44,6 +44,14 @@ struct Clustering {
   // least quadric error when that is lower.
   std::vector<std::uint8_t> locked;
   std::vector<ClampBox> box;
+  // Optional: the position quadrics (quadric_doubles(3) doubles each) of the first clusters,
+  // as many as it holds, summed as build_clustered_mesh sums them (add_plane_quadrics over each
+  // cluster's vertices), which sums those of the others; and their minimizers nearest the
+  // clusters' means (3 doubles each, read for the clusters of more than one vertex). (The
+  // adaptive grid's coarse clusters that it leaves whole, which come first in key order, have
+  // them already.)
+  std::vector<double> quadric;
+  std::vector<double> minimizer;
 };
 
 // The position of an unlocked cluster (local coordinates, as its n = 3 position `quadric`):
@@ -51,9 +59,9 @@ struct Clustering {
 // segment from the mean when it falls outside (a fold or a crease inside the cell: the planes
 // meet far away), unless `best_vertex` (a position of one of the cluster's own vertices, which
 // lie on the input surface, then its quadric error; error +infinity for none) has a lower
-// quadric error than that point.
+// quadric error than that point. `minimizer`: that minimizer when the caller has it (else null).
 void place_representative(const double* quadric, const double* mean, const ClampBox& box,
-                          const double* best_vertex, double* x);
+                          const double* best_vertex, double* x, const double* minimizer = nullptr);
 
 // Builds the clustered mesh. `origin` (model units) is subtracted from positions for the quadric
 // arithmetic; clamp boxes are relative to it. Triangles: a triangle survives when its corners are
