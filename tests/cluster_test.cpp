@@ -12,6 +12,7 @@
 #include <functional>
 #include <limits>
 #include <map>
+#include <optional>
 #include <set>
 #include <thread>
 #include <vector>
@@ -458,6 +459,25 @@ TEST(BoundaryTest, FindsEdgesUsedOnceKeyedOnPositions) {
   const Boundary open = find_boundary(tetra, make_position_ids(tetra));
   EXPECT_EQ(open.edges.size(), 3u);
   EXPECT_EQ(open.locked_position, (std::vector<std::uint8_t>{1, 0, 1, 1}));
+}
+
+TEST(WeldTest, IdenticalRecordsAreFoundAmongThoseAtOnePosition) {
+  // the seam square of FindsEdgesUsedOnceKeyedOnPositions: vertex 4 is vertex 0's position
+  // with another uv, so nothing welds
+  NodeMesh mesh;
+  mesh.layout = {false, false, true};
+  mesh.vertices = {0, 0, 0, 0, 0,  1, 0, 0, 1, 0,  1, 1, 0, 1, 1,  0, 1, 0, 0, 1,  0, 0, 0, 0.5f, 0.5f};
+  mesh.indices = {0, 1, 2, 4, 2, 3};
+  EXPECT_FALSE(has_identical_records(mesh, make_position_ids(mesh)));
+  EXPECT_FALSE(weld_if_needed(mesh).has_value());
+  // vertex 5, a copy of vertex 0 after the seam copy 4 at the same position: welds into 0
+  mesh.vertices.insert(mesh.vertices.end(), {0, 0, 0, 0, 0});
+  mesh.indices[0] = 5;
+  EXPECT_TRUE(has_identical_records(mesh, make_position_ids(mesh)));
+  const std::optional<NodeMesh> welded = weld_if_needed(mesh);
+  ASSERT_TRUE(welded.has_value());
+  EXPECT_EQ(welded->vertex_count(), 5u);
+  EXPECT_EQ(welded->indices[0], 0u);
 }
 
 TEST(BoundaryTest, KeepsOnlyTheEdgesAnotherNodeCanShare) {

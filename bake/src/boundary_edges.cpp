@@ -63,27 +63,37 @@ Boundary find_boundary(const NodeMesh& mesh, const PositionIds& positions, const
   // first entry is the edge's first use. Sequential passes instead of a hash table over every
   // corner, whose probes missed the cache.
   const std::size_t corners = mesh.indices.size();
-  auto edge_ends = [&](std::size_t c) {
-    const std::size_t next = c % 3 == 2 ? c - 2 : c + 1;
-    return std::pair{positions.of_vertex[mesh.indices[c]], positions.of_vertex[mesh.indices[next]]};
+  // every corner's position id, and (as c % 3 costs a division) the corner each corner's edge
+  // ends at
+  std::vector<std::uint32_t> position(corners);
+  for (std::size_t c = 0; c < corners; ++c) position[c] = positions.of_vertex[mesh.indices[c]];
+  auto for_each_edge = [&](auto&& f) {  // f(c, a, b): the edge from corner c (position a) to b
+    for (std::size_t c = 0; c < corners; c += 3) {
+      const std::uint32_t p0 = position[c], p1 = position[c + 1], p2 = position[c + 2];
+      f(c, p0, p1), f(c + 1, p1, p2), f(c + 2, p2, p0);
+    }
   };
   std::vector<std::uint32_t> bucket_start(std::size_t{positions.count} + 1, 0);
-  for (std::size_t c = 0; c < corners; ++c) {
-    const auto [pa, pb] = edge_ends(c);
+  for_each_edge([&](std::size_t, std::uint32_t pa, std::uint32_t pb) {
     if (pa != pb) ++bucket_start[std::min(pa, pb) + 1];
-  }
+  });
   for (std::size_t p = 0; p < positions.count; ++p) bucket_start[p + 1] += bucket_start[p];
   // (larger position id << 32 | corner): the corner c is the edge from corner c to corner c+1
   std::vector<std::uint64_t> entries(bucket_start.back());
   std::vector<std::uint32_t> fill(bucket_start.begin(), bucket_start.end() - 1);
-  for (std::size_t c = 0; c < corners; ++c) {
-    const auto [pa, pb] = edge_ends(c);
+  for_each_edge([&](std::size_t c, std::uint32_t pa, std::uint32_t pb) {
     if (pa != pb) entries[fill[std::min(pa, pb)]++] = std::uint64_t{std::max(pa, pb)} << 32 | c;
-  }
+  });
   std::vector<std::uint32_t> first_corners;  // of the edges used an odd number of times
   for (std::size_t p = 0; p < positions.count; ++p) {
     const auto begin = entries.begin() + bucket_start[p], end = entries.begin() + bucket_start[p + 1];
-    std::sort(begin, end);
+    // insertion sort: a bucket holds a handful of entries, filled in corner order
+    for (auto i = begin; i != end; ++i) {
+      const std::uint64_t entry = *i;
+      auto j = i;
+      for (; j != begin && entry < *(j - 1); --j) *j = *(j - 1);
+      *j = entry;
+    }
     for (auto run = begin; run != end;) {
       auto next = run + 1;
       while (next != end && (*next >> 32) == (*run >> 32)) ++next;

@@ -62,8 +62,11 @@ PreparedNode prepare_node(const NodeMesh& mesh, const Bounds& cell, bool lock_bo
                           const NeighbourReach& neighbours) {
   PreparedNode node;
   node.input = &mesh;
-  node.welded = weld_if_needed(mesh);
-  node.positions = make_position_ids(node.mesh());
+  node.positions = make_position_ids(mesh);
+  if (has_identical_records(mesh, node.positions)) {
+    node.welded = weld_if_needed(mesh);
+    node.positions = make_position_ids(node.mesh());
+  }
   if (lock_boundary) {
     node.boundary = find_boundary(node.mesh(), node.positions, cell, neighbours);
     node.free_border = std::move(node.boundary.free_edges);

@@ -121,6 +121,23 @@ std::optional<NodeMesh> weld_if_needed(const NodeMesh& mesh) {
   return out;
 }
 
+bool has_identical_records(const NodeMesh& mesh, const PositionIds& positions) {
+  const std::size_t stride = mesh.layout.floats();
+  const float* base = mesh.vertices.data();
+  // the vertices of each position as a chain, each to the one before it there
+  constexpr std::uint32_t kNone = ~std::uint32_t{0};
+  std::vector<std::uint32_t> last(positions.count, kNone);
+  std::vector<std::uint32_t> before(mesh.vertex_count());
+  for (std::uint32_t v = 0; v < mesh.vertex_count(); ++v) {
+    std::uint32_t& at_position = last[positions.of_vertex[v]];
+    before[v] = at_position;
+    at_position = v;
+    for (std::uint32_t u = before[v]; u != kNone; u = before[u])
+      if (std::memcmp(base + u * stride, base + v * stride, stride * 4) == 0) return true;
+  }
+  return false;
+}
+
 NodeMesh weld_identical_vertices(const NodeMesh& mesh) {
   std::optional<NodeMesh> welded = weld_if_needed(mesh);
   return welded ? std::move(*welded) : mesh;

@@ -29,6 +29,10 @@ NodeMesh weld_identical_vertices(const NodeMesh& mesh);
 // The same, or nothing when no two records are identical (the mesh is its own welded form):
 // what the simplifier uses to avoid a copy of its input in the common case.
 std::optional<NodeMesh> weld_if_needed(const NodeMesh& mesh);
+// Whether weld_if_needed would weld: two vertex records of `mesh` are identical. From its
+// position ids (make_position_ids(mesh)): only records at one position can be, so a vertex
+// alone at its position (the most) is settled without hashing its record.
+bool has_identical_records(const NodeMesh& mesh, const PositionIds& positions);
 
 struct ClampBox {
   std::array<double, 3> min;
