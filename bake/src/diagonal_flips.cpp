@@ -38,8 +38,7 @@ std::size_t flip_diagonals(InputDistances& input, std::vector<std::uint32_t>& co
   FlatHashMap<2> edge_of(corners.size() + triangle_count);
   std::vector<EdgeUse> edges;
   edges.reserve(corners.size() / 2 + 1);
-  for (std::size_t corner = 0; corner < corners.size(); ++corner) {
-    const std::size_t next = corner - corner % 3 + (corner + 1) % 3;
+  auto use_edge = [&](std::size_t corner, std::size_t next) {
     bool inserted = false;
     const std::uint32_t e = edge_of.find_or_insert(edge_key(cluster_of(corner), cluster_of(next)),
                                                    static_cast<std::uint32_t>(edges.size()), inserted);
@@ -47,8 +46,16 @@ std::size_t flip_diagonals(InputDistances& input, std::vector<std::uint32_t>& co
     EdgeUse& use = edges[e];
     if (use.uses < 2) use.corner[use.uses] = static_cast<std::uint32_t>(corner);
     ++use.uses;
-  }
+  };
+  for (std::size_t corner = 0; corner < corners.size(); corner += 3)
+    use_edge(corner, corner + 1), use_edge(corner + 1, corner + 2), use_edge(corner + 2, corner);
 
+  // the wedges of a corner's triangle from that corner on (k, k + 1, k + 2 mod 3, from a table)
+  auto from_corner = [&](std::uint32_t corner) {
+    static constexpr std::size_t kNext[3] = {1, 2, 0};
+    const std::size_t base = corner / 3 * 3, k = corner - base;
+    return std::array<std::uint32_t, 3>{corners[base + k], corners[base + kNext[k]], corners[base + kNext[kNext[k]]]};
+  };
   std::vector<std::uint8_t> flipped(triangle_count, 0);
   std::size_t flips = 0;
   const std::size_t original_edges = edges.size();
@@ -57,12 +64,10 @@ std::size_t flip_diagonals(InputDistances& input, std::vector<std::uint32_t>& co
     const std::uint32_t c0 = edges[e].corner[0], c1 = edges[e].corner[1];
     const std::size_t t0 = c0 / 3, t1 = c1 / 3;
     if (flipped[t0] || flipped[t1]) continue;
-    auto at = [&](std::size_t t, std::size_t k) { return corners[3 * t + k % 3]; };
-    const std::size_t k0 = c0 % 3, k1 = c1 % 3;
     // t0 = (a, b, c), t1 = (b, a, d) with the same wedges a and b
-    const std::uint32_t a = at(t0, k0), b = at(t0, k0 + 1), c = at(t0, k0 + 2);
-    if (at(t1, k1) != b || at(t1, k1 + 1) != a) continue;
-    const std::uint32_t d = at(t1, k1 + 2);
+    const auto [a, b, c] = from_corner(c0);
+    const auto [b1, a1, d] = from_corner(c1);
+    if (b1 != b || a1 != a) continue;
     const std::uint32_t cc = out.wedge_cluster[c], cd = out.wedge_cluster[d];
     if (cc == cd || edge_of.find(edge_key(cc, cd)) != FlatHashMap<2>::kMissing) continue;
 

@@ -255,15 +255,15 @@ ClusteredMesh build_clustered_mesh(const NodeMesh& mesh, std::span<const std::ar
   // vertex id of the wedge
   std::vector<std::uint32_t> parent(vertex_count);
   std::iota(parent.begin(), parent.end(), 0u);
+  auto join = [&](std::uint32_t u, std::uint32_t v) {
+    if (cluster[u] != cluster[v] || locked(u)) return;
+    const std::uint32_t ru = find_root(parent, u), rv = find_root(parent, v);
+    if (ru < rv) parent[rv] = ru;
+    else if (rv < ru) parent[ru] = rv;
+  };
   for (std::size_t t = 0; t < triangle_count; ++t) {
-    for (int k = 0; k < 3; ++k) {
-      const std::uint32_t u = mesh.indices[3 * t + static_cast<std::size_t>(k)];
-      const std::uint32_t v = mesh.indices[3 * t + static_cast<std::size_t>((k + 1) % 3)];
-      if (cluster[u] != cluster[v] || locked(u)) continue;
-      const std::uint32_t ru = find_root(parent, u), rv = find_root(parent, v);
-      if (ru < rv) parent[rv] = ru;
-      else if (rv < ru) parent[ru] = rv;
-    }
+    const std::uint32_t* corner = &mesh.indices[3 * t];
+    join(corner[0], corner[1]), join(corner[1], corner[2]), join(corner[2], corner[0]);
   }
   std::vector<std::uint64_t> order;  // (cluster, root) of every wedge, sorted = output order
   for (std::uint32_t v = 0; v < vertex_count; ++v)
@@ -276,6 +276,10 @@ ClusteredMesh build_clustered_mesh(const NodeMesh& mesh, std::span<const std::ar
   for (std::uint32_t v = 0; v < vertex_count; ++v) wedge[v] = wedge_of_root[find_root(parent, v)];
   const std::size_t wedge_count = order.size();
 
+  auto local_position = [&](std::uint32_t v, double* out) {
+    const float* f = &mesh.vertices[v * stride];
+    for (int i = 0; i < 3; ++i) out[i] = static_cast<double>(f[i]) - origin[static_cast<std::size_t>(i)];
+  };
   auto local_vertex = [&](std::uint32_t v, double* out) {
     const float* f = &mesh.vertices[v * stride];
     for (int i = 0; i < 3; ++i) out[i] = static_cast<double>(f[i]) - origin[static_cast<std::size_t>(i)];
@@ -310,16 +314,18 @@ ClusteredMesh build_clustered_mesh(const NodeMesh& mesh, std::span<const std::ar
   // and its attributes are those minimizing its wedge's quadric with the position fixed there.
   // Solving would only add rounding; such clusters (a large share at fine resolutions) get no
   // quadrics.
-  auto solved = [&](std::uint32_t v) { return !locked(v) && cluster_vertices[cluster[v]] > 1; };
+  std::vector<std::uint8_t> solved_vertex(vertex_count);
+  for (std::uint32_t v = 0; v < vertex_count; ++v) solved_vertex[v] = !locked(v) && cluster_vertices[cluster[v]] > 1;
+  auto solved = [&](std::uint32_t v) { return solved_vertex[v] != 0; };
 
   // position quadrics: every triangle's area-weighted plane quadric added to the cluster of each
   // of its corners that is solved, unless the clustering has the cluster's
   const std::size_t q3 = quadric_doubles(3);
   const std::size_t known_quadrics = clustering.quadric.size() / q3;
-  std::vector<std::uint8_t> solved_vertex(vertex_count);
-  for (std::uint32_t v = 0; v < vertex_count; ++v) solved_vertex[v] = solved(v) && cluster[v] >= known_quadrics;
+  std::vector<std::uint8_t> summed_here(vertex_count);
+  for (std::uint32_t v = 0; v < vertex_count; ++v) summed_here[v] = solved(v) && cluster[v] >= known_quadrics;
   std::vector<double> summed_quadric(clustering.count * q3, 0.0);
-  add_plane_quadrics(mesh, face_normal, cluster, solved_vertex, origin, summed_quadric.data(), nullptr, free_border);
+  add_plane_quadrics(mesh, face_normal, cluster, summed_here, origin, summed_quadric.data(), nullptr, free_border);
   auto cluster_quadric = [&](std::uint32_t c) {
     return c < known_quadrics ? &clustering.quadric[c * q3] : &summed_quadric[c * q3];
   };
@@ -337,8 +343,8 @@ ClusteredMesh build_clustered_mesh(const NodeMesh& mesh, std::span<const std::ar
   std::vector<double> vertex_candidate(clustering.count * 4, std::numeric_limits<double>::infinity());
   for (std::uint32_t v = 0; v < vertex_count; ++v) {
     if (!solved(v)) continue;
-    double x[kMaxQuadricDim];
-    local_vertex(v, x);
+    double x[3];
+    local_position(v, x);
     double* best = &vertex_candidate[cluster[v] * 4];  // position, then its error
     const double error = evaluate_quadric(3, cluster_quadric(cluster[v]), x);
     if (error < best[3]) std::copy(x, x + 3, best), best[3] = error;
