@@ -280,9 +280,9 @@ ClusteredMesh build_clustered_mesh(const NodeMesh& mesh, std::span<const std::ar
     const float* f = &mesh.vertices[v * stride];
     for (int i = 0; i < 3; ++i) out[i] = static_cast<double>(f[i]) - origin[static_cast<std::size_t>(i)];
   };
-  auto local_vertex = [&](std::uint32_t v, double* out) {
+  auto local_vertex = [&](std::uint32_t v, double* out) {  // the whole record
+    local_position(v, out);
     const float* f = &mesh.vertices[v * stride];
-    for (int i = 0; i < 3; ++i) out[i] = static_cast<double>(f[i]) - origin[static_cast<std::size_t>(i)];
     for (int i = 3; i < n; ++i) out[i] = f[i];
   };
 
