@@ -63,7 +63,7 @@ PreparedNode prepare_node(const NodeMesh& mesh, const Bounds& cell, bool lock_bo
   PreparedNode node;
   node.input = &mesh;
   node.positions = make_position_ids(mesh);
-  if (has_identical_records(mesh, node.positions)) {
+  if (may_have_identical_records(mesh, node.positions)) {
     node.welded = weld_if_needed(mesh);
     node.positions = make_position_ids(node.mesh());
   }

@@ -121,10 +121,14 @@ std::optional<NodeMesh> weld_if_needed(const NodeMesh& mesh) {
   return out;
 }
 
-bool has_identical_records(const NodeMesh& mesh, const PositionIds& positions) {
+bool may_have_identical_records(const NodeMesh& mesh, const PositionIds& positions) {
   const std::size_t stride = mesh.layout.floats();
   const float* base = mesh.vertices.data();
-  // the vertices of each position as a chain, each to the one before it there
+  // the vertices of each position as a chain, each to the one before it there; a vertex is
+  // compared with at most this many of them (a position shared by many wedges, or a degenerate
+  // mesh with thousands of vertices at one point, would make the walk quadratic): past that,
+  // maybe, and the caller's exact weld decides
+  constexpr int kMaxCompared = 16;
   constexpr std::uint32_t kNone = ~std::uint32_t{0};
   std::vector<std::uint32_t> last(positions.count, kNone);
   std::vector<std::uint32_t> before(mesh.vertex_count());
@@ -132,8 +136,9 @@ bool has_identical_records(const NodeMesh& mesh, const PositionIds& positions) {
     std::uint32_t& at_position = last[positions.of_vertex[v]];
     before[v] = at_position;
     at_position = v;
-    for (std::uint32_t u = before[v]; u != kNone; u = before[u])
-      if (std::memcmp(base + u * stride, base + v * stride, stride * 4) == 0) return true;
+    int compared = 0;
+    for (std::uint32_t u = before[v]; u != kNone; u = before[u], ++compared)
+      if (compared == kMaxCompared || std::memcmp(base + u * stride, base + v * stride, stride * 4) == 0) return true;
   }
   return false;
 }

@@ -29,10 +29,12 @@ NodeMesh weld_identical_vertices(const NodeMesh& mesh);
 // The same, or nothing when no two records are identical (the mesh is its own welded form):
 // what the simplifier uses to avoid a copy of its input in the common case.
 std::optional<NodeMesh> weld_if_needed(const NodeMesh& mesh);
-// Whether weld_if_needed would weld: two vertex records of `mesh` are identical. From its
-// position ids (make_position_ids(mesh)): only records at one position can be, so a vertex
-// alone at its position (the most) is settled without hashing its record.
-bool has_identical_records(const NodeMesh& mesh, const PositionIds& positions);
+// Whether weld_if_needed may weld: false when no two vertex records of `mesh` are identical;
+// true when two are, or when a position holds more vertices than this check compares (then
+// weld_if_needed decides). From its position ids (make_position_ids(mesh)): only records at one
+// position can be identical, so a vertex alone at its position (the most) is settled without
+// hashing its record. Linear in the vertex count.
+bool may_have_identical_records(const NodeMesh& mesh, const PositionIds& positions);
 
 struct ClampBox {
   std::array<double, 3> min;
