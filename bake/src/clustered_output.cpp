@@ -32,8 +32,8 @@ void InputDistances::gather() {
   // still hold the corners
   sphere_.resize(triangles);
   for (std::size_t t = 0; t < triangles; ++t) {
-    const std::uint32_t* v = &input.indices[3 * t];
-    const Sphere exact = bounding_sphere(vertex_position(input, v[0]), vertex_position(input, v[1]), vertex_position(input, v[2]));
+    const auto [a, b, c] = triangle_positions(input, t);
+    const Sphere exact = bounding_sphere(a, b, c);
     FloatSphere& sphere = sphere_[t];
     for (std::size_t i = 0; i < 3; ++i) sphere.center[i] = static_cast<float>(exact.center[i]);
     const Vec3d shift = sub(exact.center, {sphere.center[0], sphere.center[1], sphere.center[2]});
@@ -63,16 +63,11 @@ inline bool InputDistances::may_be_nearer(std::uint32_t t, const Vec3d& p, doubl
   return gap <= 0.0 || gap * gap < distance2;
 }
 
-inline std::array<Vec3d, 3> InputDistances::corners(std::uint32_t t) const {
-  const std::uint32_t* v = &out_.input.indices[3 * std::size_t{t}];
-  return {vertex_position(out_.input, v[0]), vertex_position(out_.input, v[1]), vertex_position(out_.input, v[2])};
-}
-
 void InputDistances::nearest2(std::span<const std::uint32_t> clusters, std::span<const Vec3d> points,
                               std::span<double> distance2) {
   std::fill(distance2.begin(), distance2.end(), INFINITY);
   for_each_triangle(clusters, [&](std::uint32_t t) {
-    const auto [a, b, c] = corners(t);
+    const auto [a, b, c] = triangle_positions(out_.input, t);
     for (std::size_t p = 0; p < points.size(); ++p)
       if (may_be_nearer(t, points[p], distance2[p]))
         distance2[p] = std::min(distance2[p], point_triangle_distance2(points[p], a, b, c));
@@ -89,7 +84,7 @@ bool InputDistances::nearer(std::span<const std::uint32_t> clusters, const Vec3d
     const bool lowers_current = may_be_nearer(t, current, current2);
     const bool lowers_candidate = may_be_nearer(t, candidate, std::min(candidate2, share * current2));
     if (!lowers_current && !lowers_candidate) return;
-    const auto [a, b, c] = corners(t);
+    const auto [a, b, c] = triangle_positions(out_.input, t);
     if (lowers_current) current2 = std::min(current2, point_triangle_distance2(current, a, b, c));
     if (lowers_candidate) candidate2 = std::min(candidate2, point_triangle_distance2(candidate, a, b, c));
   });

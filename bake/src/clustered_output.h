@@ -55,7 +55,6 @@ class InputDistances {
   // False when triangle t's sphere is no nearer to p than squared distance `distance2`: then
   // neither is the triangle.
   bool may_be_nearer(std::uint32_t t, const Vec3d& p, double distance2) const;
-  std::array<Vec3d, 3> corners(std::uint32_t t) const;
 
   const ClusteredOutput& out_;
   bool gathered_ = false;

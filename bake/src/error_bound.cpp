@@ -50,14 +50,9 @@ constexpr double kLocalTrusted2 = 1.1 * 1.1;
 constexpr double kInfinity = std::numeric_limits<double>::infinity();
 constexpr std::uint32_t kNone = 0xFFFFFFFFu;
 
-Triangle corners(const NodeMesh& mesh, std::size_t t) {
-  const std::uint32_t* v = &mesh.indices[3 * t];
-  return {vertex_position(mesh, v[0]), vertex_position(mesh, v[1]), vertex_position(mesh, v[2])};
-}
-
 std::vector<Triangle> triangle_corners(const NodeMesh& mesh) {
   std::vector<Triangle> all(mesh.triangle_count());
-  for (std::size_t t = 0; t < all.size(); ++t) all[t] = corners(mesh, t);
+  for (std::size_t t = 0; t < all.size(); ++t) all[t] = triangle_positions(mesh, t);
   return all;
 }
 
@@ -101,11 +96,11 @@ double bvh_bound2(const NodeMesh& input, const PartBounder& bounder, const measu
   };
   std::vector<Pending> pending;
   for (std::uint32_t t : triangles) {
-    const double bound2 = bounder.single_bound2(corners(input, t), candidates_of(t));
+    const double bound2 = bounder.single_bound2(triangle_positions(input, t), candidates_of(t));
     if (bound2 > total2) pending.push_back({bound2, t});
   }
   return settle_pending(pending, total2, [&](std::uint32_t t, double enough2) {
-    return bounder.bound2(corners(input, t), candidates_of(t), enough2, &bvh);
+    return bounder.bound2(triangle_positions(input, t), candidates_of(t), enough2, &bvh);
   });
 }
 
@@ -255,7 +250,7 @@ double hausdorff_upper_bound(const NodeMesh& input, const NodeMesh& output, cons
   for (std::size_t t = 0; t < input.triangle_count(); ++t) {
     if (image_bound2[t] <= total2) continue;
     const auto few = few_of(t, own);
-    const Triangle p = corners(input, t);
+    const Triangle p = triangle_positions(input, t);
     const std::uint32_t image = image_of(t);
     const auto others_end = std::remove_copy(few.begin(), few.end(), others.begin(), image);
     // each corner's distance to its nearest triangle so far, one of the others, is known
@@ -291,7 +286,7 @@ double hausdorff_upper_bound(const NodeMesh& input, const NodeMesh& output, cons
 
   // The closer look for the triangles the prism pieces did not cover, worst first.
   total2 = settle_pending(pending, total2, [&](std::uint32_t t, double enough2) {
-    return closer_look(corners(input, t), gather(t, few_of(t, own)), kInfinity, enough2);
+    return closer_look(triangle_positions(input, t), gather(t, few_of(t, own)), kInfinity, enough2);
   });
   if (total2 > give_up2) return kInfinity;
   if (!unresolved.empty()) total2 = bvh_bound2(input, bounder, bvh(), unresolved, total2);

@@ -22,6 +22,12 @@ inline Vec3d vertex_position(const NodeMesh& mesh, std::uint32_t v) {
   return {f[0], f[1], f[2]};
 }
 
+// Triangle t's corner positions in double (model units).
+inline std::array<Vec3d, 3> triangle_positions(const NodeMesh& mesh, std::size_t t) {
+  const std::uint32_t* v = &mesh.indices[3 * t];
+  return {vertex_position(mesh, v[0]), vertex_position(mesh, v[1]), vertex_position(mesh, v[2])};
+}
+
 inline Vec3d sub(const Vec3d& a, const Vec3d& b) { return {a[0] - b[0], a[1] - b[1], a[2] - b[2]}; }
 inline double dot(const Vec3d& a, const Vec3d& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
 inline Vec3d cross(const Vec3d& a, const Vec3d& b) {
