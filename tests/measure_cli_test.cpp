@@ -293,6 +293,22 @@ TEST(ExtractCli, LevelZeroIsTheRootLod) {
   EXPECT_EQ(r["lods"][0]["lod"], 0);
 }
 
+// `info`'s stats line: counts and bytes with every digit, seconds to six significant digits.
+TEST(InfoCli, StatsPrintCountsWholeAndSecondsShort) {
+  SKIP_WITHOUT_CLI();
+  TempDir dir;
+  write_tree(dir / "tree");
+  const fs::path file = dir / "tree" / std::string(kManifestFileName);
+  Result<Manifest> manifest = read_manifest(file);
+  ASSERT_TRUE(manifest.ok()) << manifest.status().message();
+  manifest->stats = {{"peak_rss_bytes", 19337216.0}, {"node_work_seconds", 0.34460257999999999}};
+  ASSERT_TRUE(write_manifest(file, manifest.value()).ok());
+  const CliRun run = run_cli(dir, "info " + (dir / "tree").string());
+  ASSERT_EQ(run.code, 0) << run.err;
+  EXPECT_NE(run.out.find(" node_work_seconds 0.344603 peak_rss_bytes 19337216\n"), std::string::npos)
+      << run.out;
+}
+
 TEST(ExtractCli, ErrorCutUsesOnlyLodsWithinTheTargetAndWeldsSeams) {
   SKIP_WITHOUT_CLI();
   TempDir dir;

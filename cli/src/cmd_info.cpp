@@ -3,6 +3,7 @@
 // the LODs: per chain index and per depth their counts, triangles and error range, the root's
 // chain.
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <string>
@@ -208,11 +209,15 @@ int run_info(const std::string& tree, const CommandContext& context) {
   }
   if (!m.stats.empty()) {
     std::printf("stats      ");
-    for (const auto& [name, value] : m.stats) std::printf(" %s %.17g", name.c_str(), value);
+    for (const auto& [name, value] : m.stats) {
+      if (value == std::floor(value) && std::fabs(value) < 0x1p53)  // counts and bytes: every digit
+        std::printf(" %s %.0f", name.c_str(), value);
+      else  // seconds and ratios
+        std::printf(" %s %.6g", name.c_str(), value);
+    }
     std::printf("\n");
   }
   return 0;
 }
-
 
 }  // namespace octolod::cli
