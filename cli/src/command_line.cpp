@@ -257,16 +257,18 @@ void add_walk_command(CLI::App& app, CommandContext& context) {
 }  // namespace
 
 void add_commands(CLI::App& app, CommandContext& context) {
+  // --help lists them in the order of a user's work: make an input, bake it, look at the tree,
+  // stream it, take cuts out of it, measure them.
   add_sample_command(app, context);
-  add_walk_command(app, context);
-  add_export_command(app, context);
   add_bake_command(app, context);
   add_info_command(app, context);
+  add_render_command(app, context);
+  add_walk_command(app, context);
   add_extract_command(app, context);
+  add_export_command(app, context);
   add_eval_command(app, context);
   add_reference_command(app, context);
   add_compare_command(app, context);
-  add_render_command(app, context);
 }
 
 }  // namespace octolod::cli
