@@ -65,7 +65,7 @@ PreparedNode prepare_node(const NodeMesh& mesh, const Bounds& cell, bool lock_bo
   node.positions = make_position_ids(mesh);
   if (may_have_identical_records(mesh, node.positions)) {
     node.welded = weld_if_needed(mesh);
-    node.positions = make_position_ids(node.mesh());
+    if (node.welded) node.positions = make_position_ids(node.mesh());  // else the same mesh's
   }
   if (lock_boundary) {
     node.boundary = find_boundary(node.mesh(), node.positions, cell, neighbours);
