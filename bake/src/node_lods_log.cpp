@@ -49,46 +49,16 @@ Result<NodeLodsLog> NodeLodsLog::create(const std::filesystem::path& work_dir) {
   if (!writer.ok()) return writer.status();
   log.writer_.emplace(std::move(writer).value());
   log.index_file_ = make_temp_file(work_dir, "node-lods-index");
-  log.index_fd_ = ::open(log.index_file_.path().c_str(), O_RDWR | O_CREAT | O_EXCL | O_CLOEXEC, 0600);
-  if (log.index_fd_ < 0)
+  log.index_fd_.reset(::open(log.index_file_.path().c_str(), O_RDWR | O_CREAT | O_EXCL | O_CLOEXEC, 0600));
+  if (!log.index_fd_.valid())
     return io_error(log.index_file_.path().string() + ": cannot create: " + std::strerror(errno));
   return log;
-}
-
-NodeLodsLog::NodeLodsLog(NodeLodsLog&& other) noexcept
-    : file_(std::move(other.file_)),
-      writer_(std::move(other.writer_)),
-      fd_(std::exchange(other.fd_, -1)),
-      index_file_(std::move(other.index_file_)),
-      index_fd_(std::exchange(other.index_fd_, -1)) {
-  other.writer_.reset();
-}
-
-NodeLodsLog& NodeLodsLog::operator=(NodeLodsLog&& other) noexcept {
-  if (this != &other) {
-    if (fd_ >= 0) ::close(fd_);
-    if (index_fd_ >= 0) ::close(index_fd_);
-    writer_.reset();  // before the file it writes is removed
-    file_ = std::move(other.file_);
-    writer_ = std::move(other.writer_);
-    other.writer_.reset();
-    fd_ = std::exchange(other.fd_, -1);
-    index_file_ = std::move(other.index_file_);
-    index_fd_ = std::exchange(other.index_fd_, -1);
-  }
-  return *this;
-}
-
-NodeLodsLog::~NodeLodsLog() {
-  if (fd_ >= 0) ::close(fd_);
-  if (index_fd_ >= 0) ::close(index_fd_);
-  writer_.reset();
 }
 
 Result<std::uint64_t> NodeLodsLog::stored_offset(std::int32_t node) const {
   std::uint64_t stored = 0;
   const off_t at = index_position(node);
-  const ssize_t got = ::pread(index_fd_, &stored, sizeof stored, at);
+  const ssize_t got = ::pread(index_fd_.get(), &stored, sizeof stored, at);
   if (got == 0) return std::uint64_t{0};  // past the end: never written
   if (got != static_cast<ssize_t>(sizeof stored))
     return io_error(index_file_.path().string() + ": node " + std::to_string(node) + ": cannot read offset " +
@@ -100,7 +70,7 @@ Status NodeLodsLog::append(std::int32_t node, const NodeShape& shape, const Node
   assert(writer_ && node >= 0 && !has(node) && lods.lods.size() <= kMaxLods);
   const std::uint64_t stored = writer_->records_written() + 1;
   const off_t at = index_position(node);
-  if (::pwrite(index_fd_, &stored, sizeof stored, at) != static_cast<ssize_t>(sizeof stored))
+  if (::pwrite(index_fd_.get(), &stored, sizeof stored, at) != static_cast<ssize_t>(sizeof stored))
     return io_error(index_file_.path().string() + ": cannot write at offset " + std::to_string(at) + ": " +
                     std::strerror(errno));
   const RecordHeader header{shape.prefix, shape.triangles, shape.parent,  shape.depth,
@@ -118,8 +88,8 @@ Status NodeLodsLog::finish() {
   assert(writer_);
   OCTOLOD_RETURN_IF_ERROR(writer_->finish());
   writer_.reset();
-  fd_ = ::open(file_.path().c_str(), O_RDONLY | O_CLOEXEC);
-  if (fd_ < 0) return io_error(file_.path().string() + ": cannot open: " + std::strerror(errno));
+  fd_.reset(::open(file_.path().c_str(), O_RDONLY | O_CLOEXEC));
+  if (!fd_.valid()) return io_error(file_.path().string() + ": cannot open: " + std::strerror(errno));
   return {};
 }
 
@@ -130,14 +100,14 @@ bool NodeLodsLog::has(std::int32_t node) const {
 }
 
 Result<LoggedNode> NodeLodsLog::read(std::int32_t node) const {
-  assert(fd_ >= 0 && node >= 0);
+  assert(fd_.valid() && node >= 0);
   const Result<std::uint64_t> stored = stored_offset(node);
   if (!stored.ok()) return stored.status();
   if (stored.value() == 0)
     return io_error(index_file_.path().string() + ": node " + std::to_string(node) + " was never recorded");
   const std::uint64_t offset = stored.value() - 1;
   const auto read_at = [&](void* dst, std::size_t bytes, std::uint64_t at) -> Status {
-    const ssize_t got = ::pread(fd_, dst, bytes, static_cast<off_t>(at));
+    const ssize_t got = ::pread(fd_.get(), dst, bytes, static_cast<off_t>(at));
     if (got == static_cast<ssize_t>(bytes)) return {};
     return io_error(file_.path().string() + ": node " + std::to_string(node) +
                     ": cannot read " + std::to_string(bytes) + " bytes at offset " +

@@ -20,6 +20,7 @@
 #include "octolod/bake/temp_file.h"
 #include "octolod/formats/status.h"
 #include "record_file.h"
+#include "unique_fd.h"
 
 namespace octolod::bake {
 
@@ -45,11 +46,9 @@ class NodeLodsLog {
  public:
   // A new, empty log in `work_dir` (the system temporary directory when empty).
   static Result<NodeLodsLog> create(const std::filesystem::path& work_dir);
-  NodeLodsLog(NodeLodsLog&& other) noexcept;
-  NodeLodsLog& operator=(NodeLodsLog&& other) noexcept;
-  NodeLodsLog(const NodeLodsLog&) = delete;
-  NodeLodsLog& operator=(const NodeLodsLog&) = delete;
-  ~NodeLodsLog();  // removes the file
+  NodeLodsLog(NodeLodsLog&&) noexcept = default;
+  NodeLodsLog& operator=(NodeLodsLog&&) noexcept = default;
+  // Destroyed, it removes its files.
 
   // Records node `node`'s shape, LODs (at most kMaxLods; file names ignored) and bounds, once
   // per node, in any order, until finish(). Errors: io naming the file.
@@ -73,11 +72,12 @@ class NodeLodsLog {
   // appended).
   Result<std::uint64_t> stored_offset(std::int32_t node) const;
 
+  // (destroyed in reverse: each descriptor is closed before its file is removed)
   TempFile file_;
   std::optional<RecordWriter> writer_;  // until finish()
-  int fd_ = -1;                         // for read(), after finish()
+  UniqueFd fd_;                         // for read(), after finish()
   TempFile index_file_;
-  int index_fd_ = -1;
+  UniqueFd index_fd_;
 };
 
 }  // namespace octolod::bake

@@ -69,37 +69,10 @@ Result<RecordWriter> RecordWriter::create(const std::filesystem::path& path,
   w.path_ = path;
   w.record_bytes_ = record_bytes;
   w.capacity_ = whole_records(buffer_bytes, record_bytes);
-  w.fd_ = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-  if (w.fd_ < 0) return os_error("cannot create", path, errno);
+  w.fd_.reset(::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644));
+  if (!w.fd_.valid()) return os_error("cannot create", path, errno);
   w.buffer_ = PageArray<std::byte>(w.capacity_);
   return w;
-}
-
-RecordWriter::RecordWriter(RecordWriter&& other) noexcept
-    : path_(std::move(other.path_)),
-      fd_(std::exchange(other.fd_, -1)),
-      record_bytes_(other.record_bytes_),
-      buffer_(std::move(other.buffer_)),
-      capacity_(other.capacity_),
-      used_(other.used_),
-      records_(other.records_) {}
-
-RecordWriter& RecordWriter::operator=(RecordWriter&& other) noexcept {
-  if (this != &other) {
-    if (fd_ >= 0) ::close(fd_);
-    path_ = std::move(other.path_);
-    fd_ = std::exchange(other.fd_, -1);
-    record_bytes_ = other.record_bytes_;
-    buffer_ = std::move(other.buffer_);
-    capacity_ = other.capacity_;
-    used_ = other.used_;
-    records_ = other.records_;
-  }
-  return *this;
-}
-
-RecordWriter::~RecordWriter() {
-  if (fd_ >= 0) ::close(fd_);
 }
 
 Status RecordWriter::flush() {
@@ -107,7 +80,7 @@ Status RecordWriter::flush() {
   while (done < used_) {
     const std::size_t n = used_ - done;
     ssize_t written = -1;
-    if (!fault_fires(kWriteFault, n)) written = ::write(fd_, buffer_.get() + done, n);
+    if (!fault_fires(kWriteFault, n)) written = ::write(fd_.get(), buffer_.get() + done, n);
     if (written < 0) {
       if (errno == EINTR) continue;
       return os_error("cannot write", path_, errno);
@@ -119,7 +92,7 @@ Status RecordWriter::flush() {
 }
 
 Status RecordWriter::append_runs(std::span<const std::span<const std::byte>> runs) {
-  assert(fd_ >= 0 && "RecordWriter used after finish()");
+  assert(fd_.valid() && "RecordWriter used after finish()");
   OCTOLOD_RETURN_IF_ERROR(flush());
   constexpr std::size_t kMaxIov = 1024;  // IOV_MAX on Linux
   std::vector<iovec> iov;
@@ -138,7 +111,7 @@ Status RecordWriter::append_runs(std::span<const std::span<const std::byte>> run
     while (bytes > 0) {
       ssize_t written = -1;
       if (!fault_fires(kWriteFault, bytes))
-        written = ::writev(fd_, iov.data() + next, static_cast<int>(iov.size() - next));
+        written = ::writev(fd_.get(), iov.data() + next, static_cast<int>(iov.size() - next));
       if (written < 0) {
         if (errno == EINTR) continue;
         return os_error("cannot write", path_, errno);
@@ -158,7 +131,7 @@ Status RecordWriter::append_runs(std::span<const std::span<const std::byte>> run
 }
 
 Status RecordWriter::append(const std::byte* records, std::size_t count) {
-  assert(fd_ >= 0 && "RecordWriter used after finish()");
+  assert(fd_.valid() && "RecordWriter used after finish()");
   std::size_t bytes = count * record_bytes_;
   while (bytes > 0) {
     if (used_ == capacity_) OCTOLOD_RETURN_IF_ERROR(flush());
@@ -173,7 +146,7 @@ Status RecordWriter::append(const std::byte* records, std::size_t count) {
 }
 
 Result<std::span<std::byte>> RecordWriter::reserve(std::size_t max_records) {
-  assert(fd_ >= 0 && "RecordWriter used after finish()");
+  assert(fd_.valid() && "RecordWriter used after finish()");
   if (used_ == capacity_) OCTOLOD_RETURN_IF_ERROR(flush());
   const std::size_t n = std::min(max_records, (capacity_ - used_) / record_bytes_);
   return std::span<std::byte>(buffer_.get() + used_, n * record_bytes_);
@@ -186,10 +159,9 @@ void RecordWriter::commit(std::size_t records) {
 }
 
 Status RecordWriter::finish() {
-  assert(fd_ >= 0 && "RecordWriter::finish() called twice");
+  assert(fd_.valid() && "RecordWriter::finish() called twice");
   Status status = flush();
-  const int fd = std::exchange(fd_, -1);
-  if (::close(fd) != 0 && status.ok()) status = os_error("cannot close", path_, errno);
+  if (::close(fd_.release()) != 0 && status.ok()) status = os_error("cannot close", path_, errno);
   buffer_.reset();
   return status;
 }
@@ -203,10 +175,10 @@ Result<RecordReader> RecordReader::open(const std::filesystem::path& path,
   RecordReader r;
   r.path_ = path;
   r.record_bytes_ = record_bytes;
-  r.fd_ = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
-  if (r.fd_ < 0) return os_error("cannot open", path, errno);
+  r.fd_.reset(::open(path.c_str(), O_RDONLY | O_CLOEXEC));
+  if (!r.fd_.valid()) return os_error("cannot open", path, errno);
   struct stat st {};
-  if (::fstat(r.fd_, &st) != 0) return os_error("cannot stat", path, errno);
+  if (::fstat(r.fd_.get(), &st) != 0) return os_error("cannot stat", path, errno);
   const auto size = static_cast<std::uint64_t>(st.st_size);
   if (size % record_bytes != 0) {
     return io_error("record file '" + path.string() + "' has " + std::to_string(size) +
@@ -214,7 +186,7 @@ Result<RecordReader> RecordReader::open(const std::filesystem::path& path,
                     "-byte records (truncated?)");
   }
   r.total_ = size / record_bytes;
-  ::posix_fadvise(r.fd_, 0, 0, POSIX_FADV_SEQUENTIAL);
+  ::posix_fadvise(r.fd_.get(), 0, 0, POSIX_FADV_SEQUENTIAL);
   // Never more buffer than the file needs.
   const std::uint64_t file_bytes = std::max<std::uint64_t>(size, record_bytes);
   r.capacity_ = whole_records(
@@ -223,42 +195,11 @@ Result<RecordReader> RecordReader::open(const std::filesystem::path& path,
   return r;
 }
 
-RecordReader::RecordReader(RecordReader&& other) noexcept
-    : path_(std::move(other.path_)),
-      fd_(std::exchange(other.fd_, -1)),
-      record_bytes_(other.record_bytes_),
-      buffer_(std::move(other.buffer_)),
-      capacity_(other.capacity_),
-      begin_(other.begin_),
-      end_(other.end_),
-      total_(other.total_),
-      consumed_(other.consumed_) {}
-
-RecordReader& RecordReader::operator=(RecordReader&& other) noexcept {
-  if (this != &other) {
-    if (fd_ >= 0) ::close(fd_);
-    path_ = std::move(other.path_);
-    fd_ = std::exchange(other.fd_, -1);
-    record_bytes_ = other.record_bytes_;
-    buffer_ = std::move(other.buffer_);
-    capacity_ = other.capacity_;
-    begin_ = other.begin_;
-    end_ = other.end_;
-    total_ = other.total_;
-    consumed_ = other.consumed_;
-  }
-  return *this;
-}
-
-RecordReader::~RecordReader() {
-  if (fd_ >= 0) ::close(fd_);
-}
-
 Status RecordReader::read_fully(std::byte* dst, std::size_t bytes) {
   std::size_t got = 0;
   while (got < bytes) {
     ssize_t n = -1;
-    if (!fault_fires(kReadFault, bytes - got)) n = ::read(fd_, dst + got, bytes - got);
+    if (!fault_fires(kReadFault, bytes - got)) n = ::read(fd_.get(), dst + got, bytes - got);
     if (n < 0) {
       if (errno == EINTR) continue;
       return os_error("cannot read", path_, errno);

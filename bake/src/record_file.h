@@ -14,6 +14,7 @@
 
 #include "octolod/formats/status.h"
 #include "page_array.h"
+#include "unique_fd.h"
 
 namespace octolod::bake {
 
@@ -23,11 +24,9 @@ class RecordWriter {
  public:
   static Result<RecordWriter> create(const std::filesystem::path& path, std::size_t record_bytes,
                                      std::size_t buffer_bytes);
-  RecordWriter(RecordWriter&& other) noexcept;
-  RecordWriter& operator=(RecordWriter&& other) noexcept;
-  RecordWriter(const RecordWriter&) = delete;
-  RecordWriter& operator=(const RecordWriter&) = delete;
-  ~RecordWriter();  // closes without flushing: call finish() to keep the data
+  RecordWriter(RecordWriter&&) noexcept = default;
+  RecordWriter& operator=(RecordWriter&&) noexcept = default;
+  // Destroyed, it closes the file without flushing: call finish() to keep the data.
 
   // Copies `count` records.
   Status append(const std::byte* records, std::size_t count);
@@ -50,7 +49,7 @@ class RecordWriter {
   Status flush();
 
   std::filesystem::path path_;
-  int fd_ = -1;
+  UniqueFd fd_;
   std::size_t record_bytes_ = 0;
   PageArray<std::byte> buffer_;
   std::size_t capacity_ = 0;  // bytes, a multiple of record_bytes_
@@ -65,11 +64,8 @@ class RecordReader {
  public:
   static Result<RecordReader> open(const std::filesystem::path& path, std::size_t record_bytes,
                                    std::size_t buffer_bytes);
-  RecordReader(RecordReader&& other) noexcept;
-  RecordReader& operator=(RecordReader&& other) noexcept;
-  RecordReader(const RecordReader&) = delete;
-  RecordReader& operator=(const RecordReader&) = delete;
-  ~RecordReader();
+  RecordReader(RecordReader&&) noexcept = default;
+  RecordReader& operator=(RecordReader&&) noexcept = default;
 
   // The next up to `max_records` records (at least one unless the file is exhausted, then
   // empty). Valid until the next call on the reader.
@@ -90,7 +86,7 @@ class RecordReader {
   Status read_fully(std::byte* dst, std::size_t bytes);
 
   std::filesystem::path path_;
-  int fd_ = -1;
+  UniqueFd fd_;
   std::size_t record_bytes_ = 0;
   PageArray<std::byte> buffer_;
   std::size_t capacity_ = 0;  // bytes, a multiple of record_bytes_
