@@ -321,6 +321,38 @@ TEST(Metro, TiltedNormalsShowAsAngle) {
   EXPECT_NEAR(r->two_sided.uv_rms, 0.05, 1e-5);
 }
 
+TEST(Metro, ReportsWhereTheMaxIs) {
+  // b is a with one bump: the vertex at the grid's centre raised by 0.5. The farthest sample of
+  // b from a lies near the bump's tip, and its closest point on a is straight below it (a is
+  // flat); a's farthest sample from b lies under the bump as well.
+  NodeMesh a = plane_mesh({}, 10, 1.0f, 0.0f);
+  NodeMesh b = a;
+  const std::size_t centre = 5 * 11 + 5;
+  b.vertices[3 * centre + 2] = 0.5f;
+  Result<MetroReport> r = evaluate(a, b, small_options(200'000));
+  ASSERT_TRUE(r.ok()) << r.status().message();
+  const Deviation& up = r->b_to_a;
+  EXPECT_NEAR(up.max, 0.5, 0.02);
+  EXPECT_NEAR(up.max_at[0], 0.5, 0.01);
+  EXPECT_NEAR(up.max_at[1], 0.5, 0.01);
+  EXPECT_NEAR(up.max_at[2], up.max, 1e-6);  // its height is its distance to a
+  EXPECT_NEAR(up.max_closest[0], up.max_at[0], 1e-6);
+  EXPECT_NEAR(up.max_closest[1], up.max_at[1], 1e-6);
+  EXPECT_EQ(up.max_closest[2], 0.0);
+  EXPECT_LT(std::hypot(r->a_to_b.max_at[0] - 0.5, r->a_to_b.max_at[1] - 0.5), 0.1);
+  EXPECT_EQ(r->a_to_b.max_at[2], 0.0);  // a sample of a
+  EXPECT_EQ(r->two_sided.max_at, up.max_at);  // the larger of the two directions
+  // b shifted up by 0.25 everywhere: every distance is the same, and the location a sample
+  // of the mesh (the first of them with the max, not left at the origin)
+  for (std::size_t v = 0; v < b.vertex_count(); ++v) b.vertices[3 * v + 2] = 0.25f;
+  Result<MetroReport> flat = evaluate(a, b, small_options());
+  ASSERT_TRUE(flat.ok());
+  const Deviation& d = flat->a_to_b;
+  EXPECT_EQ(d.max_at[2], 0.0);
+  EXPECT_GT(d.max_at[0] + d.max_at[1], 0.0);
+  EXPECT_NEAR(d.max_closest[2], 0.25, 1e-6);
+}
+
 TEST(Metro, ReportDoesNotDependOnThreadCount) {
   NodeMesh a = sphere_mesh({true, false, false}, 20, 40, 1.0f);
   NodeMesh b = sphere_mesh({true, false, false}, 7, 13, 1.1f);
@@ -332,6 +364,8 @@ TEST(Metro, ReportDoesNotDependOnThreadCount) {
   EXPECT_EQ(r1->two_sided.mean, r2->two_sided.mean);
   EXPECT_EQ(r1->two_sided.rms, r2->two_sided.rms);
   EXPECT_EQ(r1->two_sided.max, r2->two_sided.max);
+  EXPECT_EQ(r1->two_sided.max_at, r2->two_sided.max_at);
+  EXPECT_EQ(r1->two_sided.max_closest, r2->two_sided.max_closest);
   EXPECT_EQ(r1->two_sided.normal_mean_degrees, r2->two_sided.normal_mean_degrees);
   // another seed samples other points
   MetroOptions other = one;

@@ -22,6 +22,9 @@ void print_deviation(const char* name, const measure::Deviation& d) {
   std::printf("%-9s %9llu  mean %.6g (%.4f%%)  rms %.6g (%.4f%%)  max %.6g (%.4f%%)\n", name,
               static_cast<unsigned long long>(d.samples), d.mean, 100.0 * d.mean_relative, d.rms,
               100.0 * d.rms_relative, d.max, 100.0 * d.max_relative);
+  if (d.samples > 0)
+    std::printf("%-9s max at (%.6g %.6g %.6g), closest (%.6g %.6g %.6g)\n", "", d.max_at[0], d.max_at[1],
+                d.max_at[2], d.max_closest[0], d.max_closest[1], d.max_closest[2]);
   if (d.compared.normal)
     std::printf("%-9s normal angle mean %.3f deg, max %.3f deg\n", "", d.normal_mean_degrees,
                 d.normal_max_degrees);

@@ -9,7 +9,9 @@ nlohmann::json deviation_json(const measure::Deviation& d) {
                       {"max", d.max},
                       {"mean_relative", d.mean_relative},
                       {"rms_relative", d.rms_relative},
-                      {"max_relative", d.max_relative}};
+                      {"max_relative", d.max_relative},
+                      {"max_at", d.max_at},
+                      {"max_closest", d.max_closest}};
   if (d.compared.normal) {
     j["normal_mean_degrees"] = d.normal_mean_degrees;
     j["normal_max_degrees"] = d.normal_max_degrees;

@@ -89,11 +89,13 @@ void prepare_areas(Surface& s) {
 struct Partial {
   std::uint64_t samples = 0;
   double sum = 0.0, sum2 = 0.0, max = 0.0;
+  glm::vec3 max_at{0.0f}, max_closest{0.0f};  // the first sample at `max`, its closest point
   std::uint64_t normal_samples = 0;
   double normal_sum = 0.0, normal_max = 0.0;
   double color_sum2 = 0.0, uv_sum2 = 0.0;
 
   void add(const Partial& o) {
+    if (o.samples > 0 && (samples == 0 || o.max > max)) max_at = o.max_at, max_closest = o.max_closest;
     samples += o.samples;
     sum += o.sum;
     sum2 += o.sum2;
@@ -150,10 +152,10 @@ Partial sample_range(const Direction& dir, VertexLayout compared, std::uint64_t 
     prev_distance = hit.distance;
 
     const double d = hit.distance;
+    if (out.samples == 0 || d > out.max) out.max = d, out.max_at = p, out.max_closest = hit.point;
     ++out.samples;
     out.sum += d;
     out.sum2 += d * d;
-    out.max = std::max(out.max, d);
 
     if (compared.normal) {
       glm::vec3 na = from.interpolate(t, bary, VertexLayout::normal_offset(), 3);
@@ -195,6 +197,7 @@ Deviation to_deviation(const Partial& p, VertexLayout compared, double diagonal)
   d.mean_relative = d.mean / diagonal;
   d.rms_relative = d.rms / diagonal;
   d.max_relative = d.max / diagonal;
+  for (int k = 0; k < 3; ++k) d.max_at[k] = p.max_at[k], d.max_closest[k] = p.max_closest[k];
   if (compared.normal && p.normal_samples > 0) {
     d.normal_mean_degrees = p.normal_sum / static_cast<double>(p.normal_samples);
     d.normal_max_degrees = p.normal_max;

@@ -8,6 +8,7 @@
 // mesh) and at its closest point (on the other mesh).
 #pragma once
 
+#include <array>
 #include <cstdint>
 
 #include "octolod/formats/node_file.h"
@@ -41,6 +42,10 @@ struct Deviation {
   double mean_relative = 0.0;
   double rms_relative = 0.0;
   double max_relative = 0.0;
+  // Where `max` is reached, model units: the sample (on the sampled mesh; the first of equal
+  // ones in sample order) and its closest point on the other mesh. Zero without samples.
+  std::array<double, 3> max_at{};
+  std::array<double, 3> max_closest{};
 
   // Attributes compared at the samples: those both meshes have. A field is 0 when its attribute
   // is not compared.
