@@ -100,8 +100,8 @@ void add_compare_command(CLI::App& app, CommandContext& context) {
 void add_eval_command(CLI::App& app, CommandContext& context) {
   auto args = std::make_shared<EvalArgs>();
   CLI::App* command = app.add_subcommand(
-      "eval", "Metro-style distance between two meshes: mean, RMS, max (Hausdorff) both ways, "
-              "plus normal/colour/uv deviation");
+      "eval", "Metro-style distance between two meshes: mean, RMS, max (Hausdorff) and where it is, "
+              "both ways, plus normal/colour/uv deviation");
   command->add_option("a", args->a, "First mesh (.ply); relative numbers use its diagonal")
       ->required();
   command->add_option("b", args->b, "Second mesh (.ply)")->required();
