@@ -95,11 +95,15 @@ struct Partial {
   double color_sum2 = 0.0, uv_sum2 = 0.0;
 
   void add(const Partial& o) {
-    if (o.samples > 0 && (samples == 0 || o.max > max)) max_at = o.max_at, max_closest = o.max_closest;
+    // the max and where it is together; on equal ones the earlier run's place stays
+    if (o.samples > 0 && (samples == 0 || o.max > max)) {
+      max = o.max;
+      max_at = o.max_at;
+      max_closest = o.max_closest;
+    }
     samples += o.samples;
     sum += o.sum;
     sum2 += o.sum2;
-    max = std::max(max, o.max);
     normal_samples += o.normal_samples;
     normal_sum += o.normal_sum;
     normal_max = std::max(normal_max, o.normal_max);
