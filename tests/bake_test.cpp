@@ -28,6 +28,7 @@
 #include "octolod/bake/soup.h"
 #include "octolod/formats/manifest.h"
 #include "octolod/formats/node_file.h"
+#include "octolod/formats/ply_writer.h"
 #include "octolod/samplegen/sample_generator.h"
 #include "record_file.h"
 
@@ -644,6 +645,39 @@ TEST_F(BakeTest, EmptyMeshBakesToARootWithoutLods) {
   ASSERT_TRUE(m.ok()) << m.status().message();
   ASSERT_EQ(m->nodes.size(), 1u);
   EXPECT_TRUE(m->nodes[0].lods.empty());
+}
+
+TEST_F(BakeTest, EveryFaceTwiceSimplifiesLikeEveryFaceOnce) {
+  // Exported assets sometimes hold every face twice. The copies cancel in pairs under the mod-2
+  // output rule unless the simplifier drops the repeats first: without that, no node of this
+  // input got a second LOD and the root kept all 2 x 20K triangles.
+  samplegen::SampleSpec spec;
+  spec.shape = samplegen::Shape::rock;
+  spec.triangles = 20'000;
+  spec.layout = {true, false, false};
+  Result<NodeMesh> mesh = samplegen::generate_sample_mesh(spec);
+  ASSERT_TRUE(mesh.ok()) << mesh.status().message();
+  std::vector<std::uint32_t> twice = mesh->indices;
+  twice.insert(twice.end(), mesh->indices.begin(), mesh->indices.end());
+  PlyWriteOptions ply;
+  ply.layout = mesh->layout;
+  ASSERT_TRUE(write_ply(path("once.ply"), ply, mesh->vertices, mesh->indices).ok());
+  ASSERT_TRUE(write_ply(path("twice.ply"), ply, mesh->vertices, twice).ok());
+  auto root_coarsest = [&](const std::string& name) -> std::size_t {
+    BakeOptions o = options(name);
+    o.input = path(name + ".ply");
+    auto r = bake(o);
+    EXPECT_TRUE(r.ok()) << r.status().message();
+    auto m = read_manifest(path(name) / "manifest.json");
+    EXPECT_TRUE(m.ok()) << m.status().message();
+    if (!m.ok() || m->nodes[0].lods.empty()) return 0;
+    return m->nodes[0].lods.back().triangles;
+  };
+  const std::size_t once = root_coarsest("once"), twice_coarsest = root_coarsest("twice");
+  EXPECT_GT(once, 0u);
+  EXPECT_LE(once, 512u);
+  EXPECT_GT(twice_coarsest, 0u);
+  EXPECT_LE(twice_coarsest, 512u);
 }
 
 // --- the CLI, run as a child process (OCTOLOD_CLI) ---

@@ -492,6 +492,46 @@ TEST(WeldTest, ManyWedgesAtOnePositionLeaveTheDecisionToTheWeld) {
   EXPECT_FALSE(weld_if_needed(mesh).has_value());
 }
 
+TEST(RepeatedTrianglesTest, DropsFacesThatRepeatAnEarlierOnesPositionsInTheSameWinding) {
+  // face 0 = (0 1 2); face 1 repeats it from another corner; face 2 repeats it through vertices
+  // 3-5 (the same positions, another uv); face 3 is its back (wound the other way: a two-sided
+  // sheet, no repeat); face 4 is another face
+  NodeMesh mesh;
+  mesh.layout = {false, false, true};
+  mesh.vertices = {0, 0, 0, 0, 0,  1, 0, 0, 1, 0,  0, 1, 0, 0, 1,
+                   0, 0, 0, 0.5f, 0,  1, 0, 0, 0.5f, 0,  0, 1, 0, 0.5f, 0,  1, 1, 0, 1, 1};
+  mesh.indices = {0, 1, 2, 1, 2, 0, 3, 4, 5, 0, 2, 1, 1, 6, 2};
+  const std::optional<NodeMesh> once = without_repeated_triangles(mesh, make_position_ids(mesh));
+  ASSERT_TRUE(once.has_value());
+  // faces 0, 3, 4 stay; vertices 3-5, used only by the repeat, go; the others keep their order
+  EXPECT_EQ(once->indices, (std::vector<std::uint32_t>{0, 1, 2, 0, 2, 1, 1, 3, 2}));
+  ASSERT_EQ(once->vertex_count(), 4u);
+  EXPECT_EQ(std::vector<float>(once->vertices.end() - 5, once->vertices.end()),
+            (std::vector<float>{1, 1, 0, 1, 1}));
+  // without repeats there is nothing to do
+  mesh.indices = {0, 1, 2, 0, 2, 1, 1, 6, 2};
+  EXPECT_FALSE(without_repeated_triangles(mesh, make_position_ids(mesh)).has_value());
+}
+
+TEST(RepeatedTrianglesTest, ADoubledMeshSimplifiesLikeTheSingleOne) {
+  // Every face twice, as exported assets sometimes have them: an even number of copies of a face
+  // would cancel under the mod-2 output rule and the node would never simplify. The repeats are
+  // dropped first, so the step is the single mesh's, output and bound.
+  const NodeMesh single = make_sample(samplegen::Shape::rock, 20000);
+  NodeMesh doubled = single;
+  doubled.indices.insert(doubled.indices.end(), single.indices.begin(), single.indices.end());
+  SimplifyOptions options;
+  options.target_triangles = 2000;
+  const Bounds cell = single.bounds();
+  const Result<SimplifyResult> a = simplify_node(single, cell, options);
+  const Result<SimplifyResult> b = simplify_node(doubled, cell, options);
+  ASSERT_TRUE(a.ok() && b.ok());
+  EXPECT_GT(a->mesh.triangle_count(), 1000u);
+  EXPECT_EQ(b->mesh.indices, a->mesh.indices);
+  EXPECT_EQ(b->mesh.vertices, a->mesh.vertices);
+  EXPECT_EQ(b->error_bound, a->error_bound);
+}
+
 TEST(BoundaryTest, KeepsOnlyTheEdgesAnotherNodeCanShare) {
   // The unit square's grid (border on x, y = 0 and 1) in a cell one unit wider on every side:
   // its border lies 1 unit behind the cell's faces in x and y, 0.5 in z.

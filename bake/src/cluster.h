@@ -18,12 +18,13 @@
 namespace octolod::bake {
 
 struct PreparedNode {
-  // The input with identical vertex records welded: the input itself (not copied) when it has
-  // none, which is the rule (a merged input is welded already, a clustering's wedges nearly
-  // always differ).
-  const NodeMesh& mesh() const { return welded ? *welded : *input; }
+  // The input with identical vertex records welded and repeated faces dropped
+  // (without_repeated_triangles): the input itself (not copied) when it has neither, which is
+  // the rule (a merged input is welded already, a clustering's wedges nearly always differ, and
+  // its triple table keeps at most one face per winding).
+  const NodeMesh& mesh() const { return cleaned ? *cleaned : *input; }
   const NodeMesh* input = nullptr;  // not owned: outlives the PreparedNode
-  std::optional<NodeMesh> welded;
+  std::optional<NodeMesh> cleaned;
   PositionIds positions;
   Boundary boundary;  // empty (nothing locked) without lock_boundary
   // Without lock_boundary: the boundary edges (find_boundary), clustered like the interior, each

@@ -64,8 +64,12 @@ PreparedNode prepare_node(const NodeMesh& mesh, const Bounds& cell, bool lock_bo
   node.input = &mesh;
   node.positions = make_position_ids(mesh);
   if (may_have_identical_records(mesh, node.positions)) {
-    node.welded = weld_if_needed(mesh);
-    if (node.welded) node.positions = make_position_ids(node.mesh());  // else the same mesh's
+    node.cleaned = weld_if_needed(mesh);
+    if (node.cleaned) node.positions = make_position_ids(node.mesh());  // else the same mesh's
+  }
+  if (std::optional<NodeMesh> once = without_repeated_triangles(node.mesh(), node.positions)) {
+    node.cleaned = std::move(once);
+    node.positions = make_position_ids(node.mesh());
   }
   if (lock_boundary) {
     node.boundary = find_boundary(node.mesh(), node.positions, cell, neighbours);

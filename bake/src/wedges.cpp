@@ -143,6 +143,46 @@ bool may_have_identical_records(const NodeMesh& mesh, const PositionIds& positio
   return false;
 }
 
+std::optional<NodeMesh> without_repeated_triangles(const NodeMesh& mesh, const PositionIds& positions) {
+  const std::size_t triangles = mesh.triangle_count();
+  // every triangle's corner positions from the smallest id on, in its cyclic order
+  std::vector<std::array<std::uint32_t, 3>> corners(triangles);
+  for (std::size_t t = 0; t < triangles; ++t) {
+    const std::uint32_t* v = &mesh.indices[3 * t];
+    std::array<std::uint32_t, 3>& p = corners[t];
+    p = {positions.of_vertex[v[0]], positions.of_vertex[v[1]], positions.of_vertex[v[2]]};
+    std::rotate(p.begin(), std::min_element(p.begin(), p.end()), p.end());
+  }
+  FlatIdSet table(triangles);
+  std::vector<std::uint8_t> repeat(triangles, 0);
+  bool any = false;
+  for (std::uint32_t t = 0; t < triangles; ++t) {
+    const std::uint32_t first = table.find_or_insert(
+        t, [&](std::uint32_t u) { return hash_words(corners[u].data(), 3); },
+        [&](std::uint32_t a, std::uint32_t b) { return corners[a] == corners[b]; });
+    repeat[t] = first != t;
+    any = any || first != t;
+  }
+  if (!any) return std::nullopt;
+  const std::size_t stride = mesh.layout.floats();
+  constexpr std::uint32_t kUnused = ~std::uint32_t{0};
+  std::vector<std::uint32_t> remap(mesh.vertex_count(), kUnused);
+  for (std::size_t t = 0; t < triangles; ++t)
+    if (!repeat[t])
+      for (std::size_t k = 0; k < 3; ++k) remap[mesh.indices[3 * t + k]] = 0;
+  NodeMesh out;
+  out.layout = mesh.layout;
+  for (std::size_t v = 0; v < remap.size(); ++v) {
+    if (remap[v] == kUnused) continue;
+    remap[v] = static_cast<std::uint32_t>(out.vertex_count());
+    out.vertices.insert(out.vertices.end(), &mesh.vertices[v * stride], &mesh.vertices[v * stride] + stride);
+  }
+  for (std::size_t t = 0; t < triangles; ++t)
+    if (!repeat[t])
+      for (std::size_t k = 0; k < 3; ++k) out.indices.push_back(remap[mesh.indices[3 * t + k]]);
+  return out;
+}
+
 NodeMesh weld_identical_vertices(const NodeMesh& mesh) {
   std::optional<NodeMesh> welded = weld_if_needed(mesh);
   return welded ? std::move(*welded) : mesh;

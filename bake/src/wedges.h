@@ -35,6 +35,13 @@ std::optional<NodeMesh> weld_if_needed(const NodeMesh& mesh);
 // position can be identical, so a vertex alone at its position (the most) is settled without
 // hashing its record. Linear in the vertex count.
 bool may_have_identical_records(const NodeMesh& mesh, const PositionIds& positions);
+// `mesh` without the triangles that repeat an earlier one's corner positions in the same cyclic
+// order (a duplicated face, whatever its attributes), its vertices that only they used removed
+// (the others keep their order); nothing when no triangle repeats one. Duplicate faces are common
+// in exported assets, and under build_clustered_mesh's mod-2 rule an even number of copies of a
+// face cancels: a mesh whose every face is doubled would never simplify. `positions`:
+// make_position_ids(mesh). The same face wound the other way (a two-sided sheet) is no repeat.
+std::optional<NodeMesh> without_repeated_triangles(const NodeMesh& mesh, const PositionIds& positions);
 
 struct ClampBox {
   std::array<double, 3> min;

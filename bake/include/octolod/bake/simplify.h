@@ -9,6 +9,11 @@
 // Coordinate space: everything is in model units (the PLY's units, world space of the asset).
 // Meshes are octolod::NodeMesh: indexed, interleaved float vertices in VertexLayout order.
 //
+// Repeated faces. Before either method, a triangle that repeats an earlier one's corner positions
+// in the same winding (a duplicated face, whatever its attributes) is dropped: exported assets
+// have them, and the grid's output rule would cancel an even number of copies of a face. The
+// rules below count each face once.
+//
 // Crack-freedom contract. The boundary of a node mesh is the set of its edges used by an odd
 // number of its triangles (normally: by exactly one), where an edge is keyed by the exact float
 // bits of its two end POSITIONS (x,y,z) — vertices that differ only in normal/colour/uv are one
