@@ -1135,7 +1135,7 @@ TEST(LodTest, EveryLodErrorBoundsTheMeasuredHausdorff) {
       const double measured = measured_hausdorff(node.mesh, lod.mesh);
       std::printf("[ info ] LOD %zu: %zu tris, stored error %.5f, measured one-sided Hausdorff %.5f, ratio %.2f\n", k,
                   lod.mesh.triangle_count(), lod.error, measured, lod.error / measured);
-      EXPECT_LE(measured, lod.error) << "LOD " << k;
+      EXPECT_LE(measured, lod.error + float_measurement_margin(node.cell)) << "LOD " << k;
       EXPECT_GE(lod.error, lods.value()[k - 1].error);
       worst_ratio = std::max(worst_ratio, lod.error / measured);
       if (k == 1) first_ratio = lod.error / measured;
@@ -1168,7 +1168,9 @@ TEST(LodTest, RootChainSimplifiesTheBorderOfAnOpenSurface) {
   EXPECT_GT(kept->back().mesh.triangle_count(), locked.min_triangles);
   EXPECT_LE(free->back().mesh.triangle_count(), unlocked.min_triangles);
   for (std::size_t k = 1; k < free->size(); ++k)
-    EXPECT_LE(measured_hausdorff(terrain, free.value()[k].mesh), free.value()[k].error) << "LOD " << k;
+    EXPECT_LE(measured_hausdorff(terrain, free.value()[k].mesh),
+              free.value()[k].error + float_measurement_margin(terrain.bounds()))
+        << "LOD " << k;
 }
 
 TEST(LodTest, ChainHalvesEachStepAndStopsNearMinTriangles) {

@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "bucket_sort.h"
+#include "error_bound.h"
 #include "morton.h"
 #include "octolod/bake/external_sort.h"
 #include "octolod/bake/soup.h"
@@ -582,6 +583,11 @@ Result<NodeInfo> manifest_node(const OctreeResult& octree, std::size_t index) {
   n.source_triangles = shape.triangles;
   n.bounds = logged->lods.bounds;
   n.lods = std::move(logged->lods.lods);
+  // the stored errors bound distances measured in float too (error_bound.h): the margin once, of
+  // the root's cell for every node, so that a parent's errors stay at or above its children's
+  const double margin = float_measurement_margin(octree.cube.cell(0, 0));
+  for (LodInfo& lod : n.lods)
+    if (lod.error > 0.0) lod.error += margin;
   return n;
 }
 

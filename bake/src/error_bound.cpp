@@ -104,19 +104,9 @@ double bvh_bound2(const NodeMesh& input, const PartBounder& bounder, const measu
   });
 }
 
-// The bound from the squared total, with margins for rounding: relative 1e-6 for this file's
-// double arithmetic, and eight float epsilons of the largest coordinate of either mesh for those
-// who measure the same distances in float (measure::TriangleBvh, the runtime): the positions are
-// floats, and a bound this tight is otherwise a few float ulps below their measurements. An
-// output that holds every input point (total 0) stays at 0.
-double finish(double total2, const NodeMesh& input, const NodeMesh& output) {
-  if (total2 == 0.0) return 0.0;
-  double scale = 0.0;
-  for (const Bounds& bounds : {input.bounds(), output.bounds()})
-    for (std::size_t k = 0; k < 3; ++k)
-      scale = std::max({scale, static_cast<double>(std::abs(bounds.min[k])), static_cast<double>(std::abs(bounds.max[k]))});
-  return std::sqrt(total2) * (1.0 + 1e-6) + 8.0 * std::numeric_limits<float>::epsilon() * scale;
-}
+// The bound from the squared total, with a relative margin of 1e-6 for this file's double
+// arithmetic. An output that holds every input point (total 0) stays at 0.
+double finish(double total2) { return total2 == 0.0 ? 0.0 : std::sqrt(total2) * (1.0 + 1e-6); }
 
 }  // namespace
 
@@ -290,7 +280,7 @@ double hausdorff_upper_bound(const NodeMesh& input, const NodeMesh& output, cons
   });
   if (total2 > give_up2) return kInfinity;
   if (!unresolved.empty()) total2 = bvh_bound2(input, bounder, bvh(), unresolved, total2);
-  const double bound = finish(total2, input, output);
+  const double bound = finish(total2);
   return bound > give_up ? kInfinity : bound;
 }
 
@@ -301,7 +291,15 @@ double hausdorff_upper_bound(const NodeMesh& input, const NodeMesh& output) {
   for (std::size_t t = 0; t < all.size(); ++t) all[t] = static_cast<std::uint32_t>(t);
   const std::vector<Triangle> output_corners = triangle_corners(output);
   const measure::TriangleBvh bvh(output.vertices, output.layout.floats(), output.indices);
-  return finish(bvh_bound2(input, PartBounder(output_corners), bvh, all, 0.0), input, output);
+  return finish(bvh_bound2(input, PartBounder(output_corners), bvh, all, 0.0));
+}
+
+double float_measurement_margin(const Bounds& region) {
+  if (region.empty()) return 0.0;
+  double scale = 0.0;
+  for (std::size_t k = 0; k < 3; ++k)
+    scale = std::max({scale, static_cast<double>(std::abs(region.min[k])), static_cast<double>(std::abs(region.max[k]))});
+  return 8.0 * std::numeric_limits<float>::epsilon() * scale;
 }
 
 }  // namespace octolod::bake

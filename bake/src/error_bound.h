@@ -11,12 +11,14 @@
 namespace octolod::bake {
 
 // An upper bound, in model units, of the one-sided Hausdorff distance from `input` to `output`:
-// max over points x of the input's triangles of dist(x, output's triangles). 0 when the input has
-// no triangles, +infinity when only the output has none. Never below the true value, with margins
-// for rounding added (relative 1e-6, and 8 float epsilons of the largest coordinate, so that
-// distances measured in float do not exceed it either); usually within a few percent of it (error_bound.cpp:
-// input triangles cut into pieces that each lie over one output triangle, or split).
-// Closest-point queries (measure::TriangleBvh) for every input vertex.
+// max over points x of the input's triangles of dist(x, output's triangles), the exact distance
+// between the surfaces the meshes' float positions define. 0 when the input has no triangles (or
+// the output holds every input point), +infinity when only the output has none. Never below the
+// true value (a relative margin of 1e-6 for this file's double arithmetic); usually within a few
+// percent of it (error_bound.cpp: input triangles cut into pieces that each lie over one output
+// triangle, or split). Closest-point queries (measure::TriangleBvh) for every input vertex.
+// Distances measured in float can exceed it by float_measurement_margin: the bake adds that
+// once to each stored error, not to every step's bound, so that it does not add up along chains.
 double hausdorff_upper_bound(const NodeMesh& input, const NodeMesh& output);
 
 // Where a vertex clustering sent the input (all spans index the input / output meshes given
@@ -39,5 +41,11 @@ struct ImageHints {
 // as the bound is known to exceed it: the same answer for its comparison, for less work.
 double hausdorff_upper_bound(const NodeMesh& input, const NodeMesh& output, const ImageHints& hints,
                              double give_up = std::numeric_limits<double>::infinity());
+
+// How far a distance between points of `region` (model units) measured in float, from float
+// positions with float arithmetic (measure::TriangleBvh, a runtime), may exceed the exact one:
+// 8 float epsilons of its largest coordinate. Grows with the distance from the origin, not with
+// the model's size: 0.1 for a model 100 km from it.
+double float_measurement_margin(const Bounds& region);
 
 }  // namespace octolod::bake
