@@ -293,6 +293,31 @@ TEST(ExtractCli, LevelZeroIsTheRootLod) {
   EXPECT_EQ(r["lods"][0]["lod"], 0);
 }
 
+// Positions are floats: a model far from the origin (here 1 unit across, 4 million units out,
+// where floats are 0.25 apart) bakes, and the bake says so on stderr; at the origin it does not.
+TEST(BakeCli, WarnsWhenFloatsAreCoarseFarFromTheOrigin) {
+  SKIP_WITHOUT_CLI();
+  TempDir dir;
+  const NodeMesh grid = plane(4, 0.0f);
+  NodeMesh near;
+  near.indices = grid.indices;
+  for (std::size_t v = 0; v < grid.vertex_count(); ++v)
+    near.vertices.insert(near.vertices.end(), &grid.vertices[v * 11], &grid.vertices[v * 11] + 3);
+  NodeMesh far = near;
+  for (std::size_t i = 0; i < far.vertices.size(); i += 3) far.vertices[i] += 4.0e6f;
+  write_mesh(dir / "near.ply", near);
+  write_mesh(dir / "far.ply", far);
+  const CliRun quiet = run_cli(dir, "bake " + (dir / "near.ply").string() + " -o " + (dir / "near").string());
+  ASSERT_EQ(quiet.code, 0) << quiet.err;
+  EXPECT_EQ(quiet.err.find("warning"), std::string::npos) << quiet.err;
+  const CliRun warned = run_cli(dir, "bake " + (dir / "far.ply").string() + " -o " + (dir / "far").string());
+  ASSERT_EQ(warned.code, 0) << warned.err;
+  EXPECT_NE(warned.err.find("warning: " + (dir / "far.ply").string() + ": coordinates reach 4e+06"), std::string::npos)
+      << warned.err;
+  EXPECT_NE(warned.err.find("0.25 apart"), std::string::npos) << warned.err;
+  EXPECT_NE(warned.err.find("recentre"), std::string::npos) << warned.err;
+}
+
 // `info`'s stats line: counts and bytes with every digit, seconds to six significant digits.
 TEST(InfoCli, StatsPrintCountsWholeAndSecondsShort) {
   SKIP_WITHOUT_CLI();

@@ -5,6 +5,8 @@
 // Exit codes: 1 usage, 2 bad input, 3 unsupported, 4 I/O (unwritable output, out of space, the
 // input vanishing while read). A failed or interrupted bake publishes nothing and leaves no
 // temporary file.
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <optional>
 #include <string>
@@ -45,6 +47,31 @@ nlohmann::json report_json(const bake::BakeReport& r, const std::string& output)
           {"root_coarsest_triangles", r.root_coarsest_triangles},
           {"stage_seconds", m.stage_seconds},
           {"stats", m.stats}};
+}
+
+// Positions are floats: far from the origin they are far apart. A warning when, at the model's
+// largest coordinate, they are coarser than 16-bit quantization of its diagonal (2^16 steps
+// across it, as a game's compressed meshes keep): the input is better recentred. Nothing for an
+// empty model.
+std::optional<std::string> float_precision_warning(const Bounds& bounds) {
+  if (bounds.empty()) return std::nullopt;
+  double largest = 0.0, diagonal2 = 0.0;
+  for (std::size_t k = 0; k < 3; ++k) {
+    largest = std::max({largest, std::fabs(static_cast<double>(bounds.min[k])), std::fabs(static_cast<double>(bounds.max[k]))});
+    const double side = static_cast<double>(bounds.max[k]) - bounds.min[k];
+    diagonal2 += side * side;
+  }
+  const float at = static_cast<float>(largest);
+  const double spacing = static_cast<double>(std::nextafter(at, INFINITY)) - at;  // one float step there
+  const double diagonal = std::sqrt(diagonal2);
+  if (!(spacing * 65536.0 > diagonal)) return std::nullopt;
+  char text[320];
+  std::snprintf(text, sizeof text,
+                "coordinates reach %.3g and the model is %.3g across: stored as floats, positions there are %.3g "
+                "apart (1/%.0f of its size); recentre the input (subtract its centre) for more precision and "
+                "tighter errors",
+                largest, diagonal, spacing, diagonal / spacing);
+  return std::string(text);
 }
 
 }  // namespace
@@ -98,6 +125,8 @@ int run_bake(const BakeArgs& args, const CommandContext& context) {
     return it == seconds.end() ? 0.0 : it->second;
   };
   progress.finish("bake", stage("total"));
+  if (const std::optional<std::string> warning = float_precision_warning(r.header.bounds))
+    std::fprintf(stderr, "warning: %s: %s\n", args.input.c_str(), warning->c_str());
   if (context.json) {
     print_json(report_json(r, args.output));
     return 0;
