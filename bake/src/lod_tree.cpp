@@ -363,8 +363,10 @@ class LodTreeBuilder::Impl {
   Result<NodeDone> run_leaf(Task& task, const std::string& dir, const Bounds& cell, const LodOptions& lod,
                             Scratch& scratch) {
     if (cleanup_signal_received()) return interrupted();
-    OCTOLOD_RETURN_IF_ERROR(make_directory(dir));
-    if (!task.streamed.empty()) return run_streamed_leaf(task, dir, cell, lod);
+    if (!task.streamed.empty()) {
+      OCTOLOD_RETURN_IF_ERROR(make_directory(dir));  // its LOD 0 is written while it streams
+      return run_streamed_leaf(task, dir, cell, lod);
+    }
     NodeMesh mesh;
     scratch.indexer.index(task.records, options_.layout, mesh);
     task.records = {};  // the queue's bytes are given back in run_one
