@@ -296,6 +296,21 @@ TEST(PlyReader, VertexIndexAndTextureAliases) {
   }
 }
 
+// Some exporters name the colour diffuse_red / _green / _blue: the same colour.
+TEST(PlyReader, DiffuseColourAlias) {
+  ScratchDir dir;
+  const auto path = dir.file("diffuse.ply");
+  write_bytes(path, "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+                    "property float z\nproperty uchar diffuse_red\nproperty uchar diffuse_green\n"
+                    "property uchar diffuse_blue\nelement face 1\nproperty list uchar int vertex_indices\n"
+                    "end_header\n0 0 0 255 0 51\n1 0 0 0 255 0\n0 1 0 0 0 255\n3 0 1 2\n");
+  const PlyMesh mesh = read_ok(path);
+  EXPECT_EQ(mesh.info.layout, (VertexLayout{false, true, false}));
+  EXPECT_EQ(mesh.info.color_type, PlyColorType::uchar);
+  EXPECT_EQ(std::vector<float>(mesh.vertices.begin(), mesh.vertices.begin() + 6),
+            (std::vector<float>{0, 0, 0, 1, 0, 0.2f}));
+}
+
 // Big-endian doubles for positions, ushort colours (divided by 65535) with an alpha that is
 // dropped, float normals, short-counted int indices.
 TEST(PlyReader, BigEndianDoublesAndWideColours) {

@@ -86,7 +86,7 @@ Status plan_vertices(const ply::Element& element, const std::string& path, Eleme
   }
   const auto position = find_group<3>(element, {{"x", "y", "z"}});
   const auto normal = find_group<3>(element, {{"nx", "ny", "nz"}});
-  const auto color = find_group<3>(element, {{"red", "green", "blue"}});
+  const auto color = find_group<3>(element, {{"red", "green", "blue"}, {"diffuse_red", "diffuse_green", "diffuse_blue"}});
   const auto uv = find_group<2>(element, {{"u", "v"},
                                           {"s", "t"},
                                           {"texture_u", "texture_v"},

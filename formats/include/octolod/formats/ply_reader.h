@@ -6,9 +6,10 @@
 // Accepted: format ascii | binary_little_endian | binary_big_endian 1.0; comments and obj_info;
 // any elements in any order; scalar types char/uchar/short/ushort/int/uint/float/double and
 // int8/uint8/int16/uint16/int32/uint32/float32/float64; list properties of any count/item type.
-// Kept vertex properties: x,y,z; nx,ny,nz; red,green,blue (alpha read and dropped) as uchar or
-// float; u,v | s,t | texture_u,texture_v | texture_s,texture_t. Faces: the list property
-// vertex_indices or vertex_index. Everything else is skipped.
+// Kept vertex properties: x,y,z; nx,ny,nz; red,green,blue | diffuse_red,diffuse_green,diffuse_blue
+// (alpha read and dropped) as uchar or float; u,v | s,t | texture_u,texture_v |
+// texture_s,texture_t. Faces: the list property vertex_indices or vertex_index. Everything else
+// is skipped.
 //
 // Errors (Status bad_input unless noted) name the file and the line (ascii) or byte offset
 // (binary): truncation, bad magic/format line, unknown types, counts the file cannot hold, face
