@@ -181,105 +181,108 @@ namespace {
 constexpr std::size_t kWriterBufferBytes = std::size_t{1} << 20;
 }  // namespace
 
+// The open file of a NodeFileWriter: closed, and removed while unfinished, when it goes.
+struct NodeFileWriter::File {
+  File(std::filesystem::path p, int descriptor) : path(std::move(p)), fd(descriptor) {}
+  File(const File&) = delete;
+  File& operator=(const File&) = delete;
+  ~File() { abandon(); }
+
+  void abandon() {  // closes and removes an unfinished file
+    if (fd < 0) return;
+    ::close(std::exchange(fd, -1));
+    std::error_code ignored;
+    std::filesystem::remove(path, ignored);
+  }
+  Status write_buffer() {  // on error the file is abandoned
+    if (const int error = write_all(fd, buffer)) {
+      abandon();
+      return io_error(path.string() + ": write failed: " + std::strerror(error));
+    }
+    written += buffer.size();
+    buffer.clear();
+    return {};
+  }
+  Status flush() {  // buffer into the checksum, then written
+    crc = crc32(buffer, crc);
+    return write_buffer();
+  }
+
+  std::filesystem::path path;
+  int fd;
+  std::size_t stride = 0;
+  std::uint32_t index_bytes = 0;
+  std::uint64_t vertices_left = 0;  // floats
+  std::uint64_t indices_left = 0;
+  std::uint32_t crc = 0;
+  std::uint64_t written = 0;
+  std::vector<std::byte> buffer;
+};
+
 Result<NodeFileWriter> NodeFileWriter::create(const std::filesystem::path& path,
                                               VertexLayout layout, std::uint32_t vertex_count,
                                               std::uint32_t index_count, const Bounds& bounds) {
-  NodeFileWriter writer;
-  writer.fd_ = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-  if (writer.fd_ < 0) return io_error(path.string() + ": cannot create: " + std::strerror(errno));
-  writer.path_ = path;
-  writer.stride_ = layout.floats();
-  writer.index_bytes_ = index_bytes_for(vertex_count);
-  writer.vertices_left_ = std::uint64_t{vertex_count} * writer.stride_;
-  writer.indices_left_ = index_count;
-  writer.buffer_.reserve(kWriterBufferBytes);
-  append_header(writer.buffer_, layout, vertex_count, index_count, bounds);
-  return writer;
+  const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  if (fd < 0) return io_error(path.string() + ": cannot create: " + std::strerror(errno));
+  auto file = std::make_unique<File>(path, fd);
+  file->stride = layout.floats();
+  file->index_bytes = index_bytes_for(vertex_count);
+  file->vertices_left = std::uint64_t{vertex_count} * file->stride;
+  file->indices_left = index_count;
+  file->buffer.reserve(kWriterBufferBytes);
+  append_header(file->buffer, layout, vertex_count, index_count, bounds);
+  return NodeFileWriter(std::move(file));
 }
 
-NodeFileWriter::NodeFileWriter(NodeFileWriter&& other) noexcept { *this = std::move(other); }
-
-NodeFileWriter& NodeFileWriter::operator=(NodeFileWriter&& other) noexcept {
-  if (this == &other) return *this;
-  abandon();
-  path_ = std::move(other.path_);
-  fd_ = std::exchange(other.fd_, -1);
-  stride_ = other.stride_;
-  index_bytes_ = other.index_bytes_;
-  vertices_left_ = other.vertices_left_;
-  indices_left_ = other.indices_left_;
-  crc_ = other.crc_;
-  written_ = other.written_;
-  buffer_ = std::move(other.buffer_);
-  return *this;
-}
-
-NodeFileWriter::~NodeFileWriter() { abandon(); }
-
-void NodeFileWriter::abandon() {
-  if (fd_ < 0) return;
-  ::close(std::exchange(fd_, -1));
-  std::error_code ignored;
-  std::filesystem::remove(path_, ignored);
-}
-
-Status NodeFileWriter::write_buffer() {
-  if (const int error = write_all(fd_, buffer_)) {
-    abandon();
-    return io_error(path_.string() + ": write failed: " + std::strerror(error));
-  }
-  written_ += buffer_.size();
-  buffer_.clear();
-  return {};
-}
-
-Status NodeFileWriter::flush() {
-  crc_ = crc32(buffer_, crc_);
-  return write_buffer();
-}
+NodeFileWriter::NodeFileWriter(std::unique_ptr<File> file) : file_(std::move(file)) {}
+NodeFileWriter::NodeFileWriter(NodeFileWriter&&) noexcept = default;
+NodeFileWriter& NodeFileWriter::operator=(NodeFileWriter&&) noexcept = default;
+NodeFileWriter::~NodeFileWriter() = default;
 
 Status NodeFileWriter::append_vertices(std::span<const float> vertices) {
-  assert(fd_ >= 0 && "NodeFileWriter: used after an error or finish()");
-  assert(vertices.size() % stride_ == 0 && vertices.size() <= vertices_left_ &&
+  File& f = *file_;
+  assert(f.fd >= 0 && "NodeFileWriter: used after an error or finish()");
+  assert(vertices.size() % f.stride == 0 && vertices.size() <= f.vertices_left &&
          "NodeFileWriter: partial vertex or more vertices than declared");
-  vertices_left_ -= vertices.size();
+  f.vertices_left -= vertices.size();
   const auto* bytes = reinterpret_cast<const std::byte*>(vertices.data());
   for (std::size_t done = 0; done < vertices.size_bytes();) {
-    if (buffer_.size() >= kWriterBufferBytes) OCTOLOD_RETURN_IF_ERROR(flush());
-    const std::size_t n = std::min(vertices.size_bytes() - done, kWriterBufferBytes - buffer_.size());
-    buffer_.insert(buffer_.end(), bytes + done, bytes + done + n);
+    if (f.buffer.size() >= kWriterBufferBytes) OCTOLOD_RETURN_IF_ERROR(f.flush());
+    const std::size_t n = std::min(vertices.size_bytes() - done, kWriterBufferBytes - f.buffer.size());
+    f.buffer.insert(f.buffer.end(), bytes + done, bytes + done + n);
     done += n;
   }
   return {};
 }
 
 Status NodeFileWriter::append_indices(std::span<const std::uint32_t> indices) {
-  assert(fd_ >= 0 && "NodeFileWriter: used after an error or finish()");
-  assert(vertices_left_ == 0 && indices.size() <= indices_left_ &&
+  File& f = *file_;
+  assert(f.fd >= 0 && "NodeFileWriter: used after an error or finish()");
+  assert(f.vertices_left == 0 && indices.size() <= f.indices_left &&
          "NodeFileWriter: indices before the last vertex or more than declared");
-  indices_left_ -= indices.size();
+  f.indices_left -= indices.size();
   constexpr std::size_t kBlock = kWriterBufferBytes / 8;  // indices appended between flushes
   for (std::size_t done = 0; done < indices.size(); done += kBlock) {
-    if (buffer_.size() + kBlock * index_bytes_ > kWriterBufferBytes) OCTOLOD_RETURN_IF_ERROR(flush());
-    append_index_bytes(buffer_, indices.subspan(done, std::min(kBlock, indices.size() - done)),
-                       index_bytes_);
+    if (f.buffer.size() + kBlock * f.index_bytes > kWriterBufferBytes) OCTOLOD_RETURN_IF_ERROR(f.flush());
+    append_index_bytes(f.buffer, indices.subspan(done, std::min(kBlock, indices.size() - done)), f.index_bytes);
   }
   return {};
 }
 
 Result<std::uint64_t> NodeFileWriter::finish() {
-  assert(fd_ >= 0 && "NodeFileWriter: used after an error or finish()");
-  assert(vertices_left_ == 0 && indices_left_ == 0 && "NodeFileWriter: fewer items than declared");
-  OCTOLOD_RETURN_IF_ERROR(flush());
-  detail::append_le(buffer_, crc_);  // the checksum covers everything before it
-  OCTOLOD_RETURN_IF_ERROR(write_buffer());
-  if (::close(std::exchange(fd_, -1)) != 0) {
+  File& f = *file_;
+  assert(f.fd >= 0 && "NodeFileWriter: used after an error or finish()");
+  assert(f.vertices_left == 0 && f.indices_left == 0 && "NodeFileWriter: fewer items than declared");
+  OCTOLOD_RETURN_IF_ERROR(f.flush());
+  detail::append_le(f.buffer, f.crc);  // the checksum covers everything before it
+  OCTOLOD_RETURN_IF_ERROR(f.write_buffer());
+  if (::close(std::exchange(f.fd, -1)) != 0) {
     const int error = errno;
     std::error_code ignored;
-    std::filesystem::remove(path_, ignored);
-    return io_error(path_.string() + ": write failed: " + std::strerror(error));
+    std::filesystem::remove(f.path, ignored);
+    return io_error(f.path.string() + ": write failed: " + std::strerror(error));
   }
-  return written_;
+  return f.written;
 }
 
 Result<NodeMesh> read_node_file(const std::filesystem::path& path) {

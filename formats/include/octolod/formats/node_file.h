@@ -12,6 +12,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <filesystem>
+#include <memory>
 #include <span>
 #include <string_view>
 #include <vector>
@@ -57,10 +58,8 @@ class NodeFileWriter {
   static Result<NodeFileWriter> create(const std::filesystem::path& path, VertexLayout layout,
                                        std::uint32_t vertex_count, std::uint32_t index_count,
                                        const Bounds& bounds);
-  NodeFileWriter(NodeFileWriter&& other) noexcept;
-  NodeFileWriter& operator=(NodeFileWriter&& other) noexcept;
-  NodeFileWriter(const NodeFileWriter&) = delete;
-  NodeFileWriter& operator=(const NodeFileWriter&) = delete;
+  NodeFileWriter(NodeFileWriter&&) noexcept;
+  NodeFileWriter& operator=(NodeFileWriter&&) noexcept;
   ~NodeFileWriter();  // an unfinished file is removed
 
   // Whole vertices (layout.floats() floats each); asserted not to pass vertex_count.
@@ -71,20 +70,9 @@ class NodeFileWriter {
   Result<std::uint64_t> finish();
 
  private:
-  NodeFileWriter() = default;
-  Status flush();         // buffer into the checksum, then written
-  Status write_buffer();  // on error the file is abandoned
-  void abandon();         // closes and removes an unfinished file
-
-  std::filesystem::path path_;
-  int fd_ = -1;
-  std::size_t stride_ = 0;
-  std::uint32_t index_bytes_ = 0;
-  std::uint64_t vertices_left_ = 0;  // floats
-  std::uint64_t indices_left_ = 0;
-  std::uint32_t crc_ = 0;
-  std::uint64_t written_ = 0;
-  std::vector<std::byte> buffer_;
+  struct File;  // the open file and what is left to write (node_file.cpp)
+  explicit NodeFileWriter(std::unique_ptr<File> file);
+  std::unique_ptr<File> file_;
 };
 
 // CRC-32 (IEEE 802.3, reflected, as zlib's crc32) of `bytes`, continuing from `crc`.
