@@ -295,11 +295,7 @@ double hausdorff_upper_bound(const NodeMesh& input, const NodeMesh& output) {
 }
 
 double float_measurement_margin(const Bounds& region) {
-  if (region.empty()) return 0.0;
-  double scale = 0.0;
-  for (std::size_t k = 0; k < 3; ++k)
-    scale = std::max({scale, static_cast<double>(std::abs(region.min[k])), static_cast<double>(std::abs(region.max[k]))});
-  return 8.0 * std::numeric_limits<float>::epsilon() * scale;
+  return 8.0 * std::numeric_limits<float>::epsilon() * region.largest_magnitude();
 }
 
 }  // namespace octolod::bake

@@ -49,10 +49,7 @@ struct RootCube {
     double extent = 0;
     for (int a = 0; a < 3; ++a)
       extent = std::max(extent, static_cast<double>(bounds.max[a]) - bounds.min[a]);
-    double magnitude = 0;
-    for (int a = 0; a < 3; ++a)
-      magnitude = std::max({magnitude, std::abs(static_cast<double>(bounds.min[a])),
-                            std::abs(static_cast<double>(bounds.max[a]))});
+    const double magnitude = bounds.largest_magnitude();
     // Float positions are only precise to ~1e-7 of their magnitude: keep the margin above it.
     const double margin = std::max(extent, magnitude) * 0x1p-20 + 0x1p-100;
     for (int a = 0; a < 3; ++a) cube.origin[a] = static_cast<double>(bounds.min[a]) - margin;

@@ -5,7 +5,6 @@
 // Exit codes: 1 usage, 2 bad input, 3 unsupported, 4 I/O (unwritable output, out of space, the
 // input vanishing while read). A failed or interrupted bake publishes nothing and leaves no
 // temporary file.
-#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <optional>
@@ -55,15 +54,9 @@ nlohmann::json report_json(const bake::BakeReport& r, const std::string& output)
 // empty model.
 std::optional<std::string> float_precision_warning(const Bounds& bounds) {
   if (bounds.empty()) return std::nullopt;
-  double largest = 0.0, diagonal2 = 0.0;
-  for (std::size_t k = 0; k < 3; ++k) {
-    largest = std::max({largest, std::fabs(static_cast<double>(bounds.min[k])), std::fabs(static_cast<double>(bounds.max[k]))});
-    const double side = static_cast<double>(bounds.max[k]) - bounds.min[k];
-    diagonal2 += side * side;
-  }
+  const double largest = bounds.largest_magnitude(), diagonal = bounds.diagonal();
   const float at = static_cast<float>(largest);
   const double spacing = static_cast<double>(std::nextafter(at, INFINITY)) - at;  // one float step there
-  const double diagonal = std::sqrt(diagonal2);
   if (!(spacing * 65536.0 > diagonal)) return std::nullopt;
   char text[320];
   std::snprintf(text, sizeof text,

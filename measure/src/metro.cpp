@@ -249,10 +249,7 @@ Result<MetroReport> evaluate(const NodeMesh& a, const NodeMesh& b, const MetroOp
   if (!(sb.area > 0.0)) return bad_input_error("mesh b: the surface has zero area");
   report.area_a = sa.area;
   report.area_b = sb.area;
-  Bounds box = a.bounds();
-  report.diagonal = std::sqrt(std::pow(double{box.max[0]} - box.min[0], 2) +
-                              std::pow(double{box.max[1]} - box.min[1], 2) +
-                              std::pow(double{box.max[2]} - box.min[2], 2));
+  report.diagonal = a.bounds().diagonal();
 
   const VertexLayout compared{a.layout.normal && b.layout.normal, a.layout.color && b.layout.color,
                               a.layout.uv && b.layout.uv};

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <limits>
 
 namespace octolod {
@@ -31,6 +32,24 @@ struct Bounds {
     for (int i = 0; i < 3; ++i)
       if (p[i] < min[i] || p[i] > max[i]) return false;
     return true;
+  }
+  // Length of the box's diagonal, in double (0 for a point; meaningless when empty).
+  double diagonal() const {
+    double sum = 0.0;
+    for (int i = 0; i < 3; ++i) {
+      const double side = static_cast<double>(max[i]) - min[i];
+      sum += side * side;
+    }
+    return std::sqrt(sum);
+  }
+  // The largest absolute coordinate of its corners: how far from the origin its floats reach
+  // (their spacing there sets the positions' precision). 0 when empty.
+  double largest_magnitude() const {
+    if (empty()) return 0.0;
+    double largest = 0.0;
+    for (int i = 0; i < 3; ++i)
+      largest = std::max({largest, std::abs(static_cast<double>(min[i])), std::abs(static_cast<double>(max[i]))});
+    return largest;
   }
   friend bool operator==(const Bounds&, const Bounds&) = default;
 };
