@@ -143,6 +143,26 @@ bool may_have_identical_records(const NodeMesh& mesh, const PositionIds& positio
   return false;
 }
 
+NodeMesh mesh_of_used_records(VertexLayout layout, std::span<const float> records,
+                              std::span<const std::uint32_t> corners) {
+  const std::size_t stride = layout.floats();
+  constexpr std::uint32_t kUnused = ~std::uint32_t{0};
+  std::vector<std::uint32_t> id(records.size() / stride, kUnused);
+  for (const std::uint32_t r : corners) id[r] = 0;
+  NodeMesh out;
+  out.layout = layout;
+  std::uint32_t next = 0;
+  for (std::size_t r = 0; r < id.size(); ++r) {
+    if (id[r] == kUnused) continue;
+    id[r] = next++;
+    out.vertices.insert(out.vertices.end(), records.begin() + static_cast<std::ptrdiff_t>(r * stride),
+                        records.begin() + static_cast<std::ptrdiff_t>((r + 1) * stride));
+  }
+  out.indices.reserve(corners.size());
+  for (const std::uint32_t r : corners) out.indices.push_back(id[r]);
+  return out;
+}
+
 std::optional<NodeMesh> without_repeated_triangles(const NodeMesh& mesh, const PositionIds& positions) {
   const std::size_t triangles = mesh.triangle_count();
   // every triangle's corner positions from the smallest id on, in its cyclic order
@@ -154,33 +174,15 @@ std::optional<NodeMesh> without_repeated_triangles(const NodeMesh& mesh, const P
     std::rotate(p.begin(), std::min_element(p.begin(), p.end()), p.end());
   }
   FlatIdSet table(triangles);
-  std::vector<std::uint8_t> repeat(triangles, 0);
-  bool any = false;
+  std::vector<std::uint32_t> kept;  // the corners of the triangles that repeat none
   for (std::uint32_t t = 0; t < triangles; ++t) {
     const std::uint32_t first = table.find_or_insert(
         t, [&](std::uint32_t u) { return hash_words(corners[u].data(), 3); },
         [&](std::uint32_t a, std::uint32_t b) { return corners[a] == corners[b]; });
-    repeat[t] = first != t;
-    any = any || first != t;
+    if (first == t) kept.insert(kept.end(), &mesh.indices[3 * std::size_t{t}], &mesh.indices[3 * std::size_t{t}] + 3);
   }
-  if (!any) return std::nullopt;
-  const std::size_t stride = mesh.layout.floats();
-  constexpr std::uint32_t kUnused = ~std::uint32_t{0};
-  std::vector<std::uint32_t> remap(mesh.vertex_count(), kUnused);
-  for (std::size_t t = 0; t < triangles; ++t)
-    if (!repeat[t])
-      for (std::size_t k = 0; k < 3; ++k) remap[mesh.indices[3 * t + k]] = 0;
-  NodeMesh out;
-  out.layout = mesh.layout;
-  for (std::size_t v = 0; v < remap.size(); ++v) {
-    if (remap[v] == kUnused) continue;
-    remap[v] = static_cast<std::uint32_t>(out.vertex_count());
-    out.vertices.insert(out.vertices.end(), &mesh.vertices[v * stride], &mesh.vertices[v * stride] + stride);
-  }
-  for (std::size_t t = 0; t < triangles; ++t)
-    if (!repeat[t])
-      for (std::size_t k = 0; k < 3; ++k) out.indices.push_back(remap[mesh.indices[3 * t + k]]);
-  return out;
+  if (kept.size() == mesh.indices.size()) return std::nullopt;
+  return mesh_of_used_records(mesh.layout, mesh.vertices, kept);
 }
 
 NodeMesh weld_identical_vertices(const NodeMesh& mesh) {
@@ -513,8 +515,6 @@ ClusteredMesh build_clustered_mesh(const NodeMesh& mesh, std::span<const std::ar
 
   // output: kept_copies per candidate, oriented like their sources, vertices compacted in wedge order
   ClusteredMesh result;
-  NodeMesh& out = result.mesh;
-  out.layout = layout;
   std::vector<std::uint32_t> kept;  // wedge corners of kept triangles
   std::vector<std::uint32_t> output_of_candidate(candidates.size(), kNoTriangle);
   auto source_wedges = [&](std::uint32_t t) {
@@ -538,17 +538,7 @@ ClusteredMesh build_clustered_mesh(const NodeMesh& mesh, std::span<const std::ar
   const FoldRepair folds = remove_folded_fans(input, kept);
   for (std::uint32_t& o : output_of_candidate)
     if (o != kNoTriangle) o = folds.index[o];
-  std::vector<std::uint32_t> output_id(wedge_count, UINT32_MAX);
-  for (std::uint32_t w : kept) output_id[w] = 0;
-  std::uint32_t next = 0;
-  for (std::size_t w = 0; w < wedge_count; ++w) {
-    if (output_id[w] == UINT32_MAX) continue;
-    output_id[w] = next++;
-    out.vertices.insert(out.vertices.end(), wedge_record.begin() + static_cast<std::ptrdiff_t>(w * stride),
-                        wedge_record.begin() + static_cast<std::ptrdiff_t>((w + 1) * stride));
-  }
-  out.indices.reserve(kept.size());
-  for (std::uint32_t w : kept) out.indices.push_back(output_id[w]);
+  result.mesh = mesh_of_used_records(layout, wedge_record, kept);
   std::vector<std::uint32_t> kept_cluster(kept.size());
   for (std::size_t i = 0; i < kept.size(); ++i) kept_cluster[i] = wedge_cluster[kept[i]];
   result.vertex_cluster = cluster;

@@ -35,6 +35,10 @@ std::optional<NodeMesh> weld_if_needed(const NodeMesh& mesh);
 // position can be identical, so a vertex alone at its position (the most) is settled without
 // hashing its record. Linear in the vertex count.
 bool may_have_identical_records(const NodeMesh& mesh, const PositionIds& positions);
+// The mesh whose triangles are `corners` (indices of `records`, layout.floats() floats each;
+// three per triangle): the records they use, in their order, and the corners renumbered to them.
+NodeMesh mesh_of_used_records(VertexLayout layout, std::span<const float> records,
+                              std::span<const std::uint32_t> corners);
 // `mesh` without the triangles that repeat an earlier one's corner positions in the same cyclic
 // order (a duplicated face, whatever its attributes), its vertices that only they used removed
 // (the others keep their order); nothing when no triangle repeats one. Duplicate faces are common
