@@ -3,8 +3,6 @@
 // MB/s, nodes and LODs per second, and the peak RSS (getrusage: one manifest at a time).
 //
 //   manifest_bench TREE [--repeat 7]
-#include <sys/resource.h>
-
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -14,14 +12,9 @@
 #include <vector>
 
 #include "octolod/formats/manifest.h"
+#include "peak_rss_mib.h"
 
 namespace {
-
-double peak_rss_mib() {
-  rusage usage{};
-  ::getrusage(RUSAGE_SELF, &usage);
-  return static_cast<double>(usage.ru_maxrss) / 1024.0;  // ru_maxrss is in KiB on Linux
-}
 
 int usage_error() {
   std::fprintf(stderr, "usage: manifest_bench TREE [--repeat N]\n");

@@ -7,7 +7,6 @@
 //              [--work DIR] [--repeat N] [--sink]
 // --sink hands the soup to a callback (as the octree stage can) instead of writing the file.
 // The PLY is cached in the work directory as soup-bench-<shape>-<triangles>-<mask>.ply.
-#include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -20,18 +19,13 @@
 
 #include "octolod/bake/soup.h"
 #include "octolod/samplegen/sample_generator.h"
+#include "peak_rss_mib.h"
 
 namespace {
 
 using namespace octolod;
 
 std::uint64_t sink_bytes = 0;  // soup bytes handed to the --sink callback
-
-double peak_rss_mib() {
-  rusage usage{};
-  ::getrusage(RUSAGE_SELF, &usage);
-  return static_cast<double>(usage.ru_maxrss) / 1024.0;  // ru_maxrss is in KiB on Linux
-}
 
 bool parse_bytes(std::string_view text, std::uint64_t& out) {
   if (text.empty()) return false;
