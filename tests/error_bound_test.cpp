@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <random>
 #include <vector>
 
 #include "error_bound.h"
@@ -136,6 +137,52 @@ TEST(PartBound, ThePrismPiecesCountOnlyOnceTheyProvablyCoverThePart) {
   EXPECT_NEAR(std::sqrt(bounder.prism_bound2(part, square_first, 0.0)), 0.01, 1e-9);
   EXPECT_EQ(bounder.prism_bound2(part, sheet_first, 0.0), std::numeric_limits<double>::infinity());
   EXPECT_EQ(bounder.prism_bound2(part, half_and_sheet, 0.0), std::numeric_limits<double>::infinity());
+}
+
+TEST(PartBound, APartWoundTheOtherWayIsCoveredByTheCandidatesFacingAway) {
+  // The straddling part wound clockwise faces away from the square: the square's triangles
+  // tile its shadow all the same (for the part wound back), and bound it by its height.
+  const std::vector<Triangle3d> output{{{{0, 0, 0}, {1, 0, 0}, {1, 1, 0}}}, {{{0, 0, 0}, {1, 1, 0}, {0, 1, 0}}}};
+  const PartBounder bounder(output);
+  const Triangle3d part{{{0.1, 0.1, 0.01}, {0.2, 0.9, 0.01}, {0.9, 0.2, 0.01}}};
+  const std::vector<std::uint32_t> square{0, 1};
+  EXPECT_NEAR(std::sqrt(bounder.prism_bound2(part, square, 0.0)), 0.01, 1e-9);
+}
+
+// The unit square at height 0 as an n x n grid of quads, two triangles each; with `wound` false
+// for a triangle, that triangle wound the other way.
+std::vector<Triangle3d> square_grid(int n, const std::vector<bool>& wound) {
+  std::vector<Triangle3d> grid;
+  auto at = [n](int i, int j) { return Vec3d{static_cast<double>(i) / n, static_cast<double>(j) / n, 0.0}; };
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i)
+      for (Triangle3d t : {Triangle3d{at(i, j), at(i + 1, j), at(i + 1, j + 1)}, Triangle3d{at(i, j), at(i + 1, j + 1), at(i, j + 1)}}) {
+        if (!wound[grid.size()]) std::swap(t[1], t[2]);
+        grid.push_back(t);
+      }
+  return grid;
+}
+
+TEST(PartBound, AnOutputWoundAtRandomTilesThePartsShadowAsWoundConsistently) {
+  // A 4 x 4 grid under the straddling part with half its triangles wound the other way: the
+  // pieces over the triangles facing like the part leave holes, over those facing away the
+  // rest. The bounder re-winds the output consistently and the part is bounded by its height
+  // either way round.
+  constexpr int kGrid = 4;
+  std::vector<bool> consistent(2 * kGrid * kGrid, true), mixed(2 * kGrid * kGrid, true);
+  std::minstd_rand coin(1);
+  for (std::size_t t = 0; t < mixed.size(); ++t) mixed[t] = coin() % 2 == 0;
+  const std::vector<Triangle3d> good = square_grid(kGrid, consistent), bad = square_grid(kGrid, mixed);
+  std::vector<std::uint32_t> all(good.size());
+  for (std::size_t t = 0; t < all.size(); ++t) all[t] = static_cast<std::uint32_t>(t);
+  const Triangle3d part{{{0.1, 0.1, 0.01}, {0.9, 0.2, 0.01}, {0.2, 0.9, 0.01}}};
+  const Triangle3d reversed{part[0], part[2], part[1]};
+  const PartBounder consistent_bounder(good), mixed_bounder(bad);
+  EXPECT_NEAR(std::sqrt(consistent_bounder.prism_bound2(part, all, 0.0)), 0.01, 1e-9);
+  EXPECT_NEAR(std::sqrt(mixed_bounder.prism_bound2(part, all, 0.0)), 0.01, 1e-9);
+  EXPECT_NEAR(std::sqrt(mixed_bounder.prism_bound2(reversed, all, 0.0)), 0.01, 1e-9);
+  // distances do not depend on the winding
+  for (std::uint32_t t : all) EXPECT_EQ(mixed_bounder.distance2(part[1], t), consistent_bounder.distance2(part[1], t));
 }
 
 TEST(ErrorBound, AGapInTheOutputIsMeasuredAcrossIt) {

@@ -5,6 +5,7 @@
 #include <bit>
 #include <cmath>
 #include <limits>
+#include <optional>
 
 namespace octolod::bake {
 namespace {
@@ -99,6 +100,109 @@ std::span<const std::uint32_t> with_nearest(std::span<const std::uint32_t> candi
   return storage;
 }
 
+// The directed edges 3 t + k of a triangle list (corner k to k + 1), found by the positions of
+// their ends: chained by the signatures of those positions as they run.
+class DirectedEdges {
+ public:
+  explicit DirectedEdges(std::span<const Triangle3d> triangles)
+      : triangles_(triangles), signature_(3 * triangles.size()), back_(3 * triangles.size()),
+        next_(3 * triangles.size()), head_(std::bit_ceil(std::max<std::size_t>(16, 6 * triangles.size())), kNoEdge),
+        mask_(head_.size() - 1) {
+    for (std::size_t t = 0; t < triangles.size(); ++t) {
+      const Triangle3d& tri = triangles[t];
+      const std::array<std::uint64_t, 3> key{position_key(tri[0]), position_key(tri[1]), position_key(tri[2])};
+      for (std::size_t k = 0; k < 3; ++k) {
+        const std::size_t edge = 3 * t + k;
+        signature_[edge] = edge_signature(key[k], key[k + 1 == 3 ? 0 : k + 1]);
+        back_[edge] = edge_signature(key[k + 1 == 3 ? 0 : k + 1], key[k]);
+        next_[edge] = head_[signature_[edge] & mask_];
+        head_[signature_[edge] & mask_] = static_cast<std::uint32_t>(edge);
+      }
+    }
+  }
+  // Calls visit(m) for each edge m of another triangle that runs the positions of `edge` the
+  // same way (backwards false) or backwards, until it returns true.
+  template <class Visit>
+  void others(std::size_t edge, bool backwards, Visit&& visit) const {
+    const std::size_t t = edge / 3, k = edge % 3;
+    const Vec3d& a = triangles_[t][k];
+    const Vec3d& b = triangles_[t][k + 1 == 3 ? 0 : k + 1];
+    const Vec3d &from = backwards ? b : a, &to = backwards ? a : b;
+    const std::uint32_t wanted = backwards ? back_[edge] : signature_[edge];
+    for (std::uint32_t m = head_[wanted & mask_]; m != kNoEdge; m = next_[m]) {
+      const Triangle3d& other = triangles_[m / 3];
+      const std::size_t j = m % 3;
+      if (m / 3 != t && signature_[m] == wanted && other[j] == from && other[j + 1 == 3 ? 0 : j + 1] == to && visit(m))
+        return;
+    }
+  }
+
+ private:
+  static constexpr std::uint32_t kNoEdge = 0xFFFFFFFFu;
+  std::span<const Triangle3d> triangles_;
+  std::vector<std::uint32_t> signature_, back_, next_, head_;
+  std::size_t mask_;
+};
+
+// Which triangles to re-wind so that across every manifold edge (two triangles on it) the two
+// run it opposite ways, where they can: in each connected piece whose winding is inconsistent,
+// the part of the smaller area. Empty when none needs it. An inconsistently wound output keeps
+// the prism pieces from tiling a part's shadow (they take the candidates facing like the part);
+// inconsistent means at least a quarter of the piece's manifold edges run alike on both sides
+// (on 1M rocks at most 7%: the clustering's folds, triangles re-wound to face like their
+// sources, which the prism needs as they are; a mesh wound at random: 45-55%).
+std::vector<std::uint8_t> rewinding(std::span<const Triangle3d> triangles, const DirectedEdges& edges) {
+  constexpr std::uint32_t kNoTriangle = 0xFFFFFFFFu;
+  const std::size_t edge_count = 3 * triangles.size();
+  std::vector<std::uint32_t> neighbour(edge_count, kNoTriangle);  // across a manifold edge
+  std::vector<std::uint8_t> alike(edge_count, 0);                 // it runs the edge the same way
+  bool any_alike = false;
+  for (std::size_t edge = 0; edge < edge_count; ++edge) {
+    std::uint32_t found = kNoTriangle, count = 0;
+    for (const bool backwards : {true, false})
+      edges.others(edge, backwards, [&](std::uint32_t m) {
+        found = m / 3;
+        alike[edge] = !backwards;
+        return ++count > 1;
+      });
+    if (count != 1) continue;
+    neighbour[edge] = found;
+    any_alike = any_alike || alike[edge];
+  }
+  if (!any_alike) return {};
+  std::vector<std::uint8_t> flip(triangles.size(), 0), seen(triangles.size(), 0);
+  std::vector<std::uint32_t> piece;
+  bool any_flip = false;
+  for (std::size_t seed = 0; seed < triangles.size(); ++seed) {
+    if (seen[seed]) continue;
+    piece.assign(1, static_cast<std::uint32_t>(seed));
+    seen[seed] = 1;
+    double flipped_area = 0.0, kept_area = 0.0;
+    std::size_t manifold_edges = 0, alike_edges = 0;
+    for (std::size_t i = 0; i < piece.size(); ++i) {
+      const std::uint32_t t = piece[i];
+      const Triangle3d& tri = triangles[t];
+      const Vec3d n = cross(sub(tri[1], tri[0]), sub(tri[2], tri[0]));
+      (flip[t] ? flipped_area : kept_area) += std::sqrt(dot(n, n));
+      for (std::size_t k = 0; k < 3; ++k) {
+        const std::uint32_t other = neighbour[3 * t + k];
+        if (other == kNoTriangle) continue;
+        ++manifold_edges;
+        alike_edges += alike[3 * t + k];
+        if (seen[other]) continue;
+        seen[other] = 1;
+        flip[other] = static_cast<std::uint8_t>(flip[t] ^ alike[3 * t + k]);
+        piece.push_back(other);
+      }
+    }
+    const bool inconsistent = 4 * alike_edges >= manifold_edges && alike_edges > 0;
+    for (const std::uint32_t t : piece) flip[t] = inconsistent && (flip[t] != 0) == (kept_area >= flipped_area);
+    any_flip = any_flip || inconsistent;
+  }
+  if (!any_flip) return {};
+  return flip;
+}
+
 }  // namespace
 
 std::uint32_t closest_triangle(const measure::TriangleBvh& bvh, const Vec3d& p) {
@@ -106,41 +210,28 @@ std::uint32_t closest_triangle(const measure::TriangleBvh& bvh, const Vec3d& p) 
 }
 
 PartBounder::PartBounder(std::span<const Triangle3d> output) : output_(output) {
-  normal_.reserve(output.size());
-  sphere_.reserve(output.size());
-  // the directed edges, 3 t + k, by the signatures of their corners' positions as they run and run
-  // backwards, chained by the first (head[s & mask], then next)
-  const std::size_t edges = 3 * output.size();
-  std::vector<std::uint32_t> signature(edges), back(edges), next(edges);
-  std::vector<std::uint32_t> head(std::bit_ceil(std::max<std::size_t>(16, 2 * edges)), kNone);
-  const std::size_t mask = head.size() - 1;
-  for (std::size_t t = 0; t < output.size(); ++t) {
-    const Triangle3d& tri = output[t];
-    const std::array<std::uint64_t, 3> key{position_key(tri[0]), position_key(tri[1]), position_key(tri[2])};
-    for (std::size_t k = 0; k < 3; ++k) {
-      const std::size_t edge = 3 * t + k;
-      signature[edge] = edge_signature(key[k], key[k + 1 == 3 ? 0 : k + 1]);
-      back[edge] = edge_signature(key[k + 1 == 3 ? 0 : k + 1], key[k]);
-      next[edge] = head[signature[edge] & mask];
-      head[signature[edge] & mask] = static_cast<std::uint32_t>(edge);
-    }
+  std::optional<DirectedEdges> edges(std::in_place, output_);
+  if (const std::vector<std::uint8_t> flip = rewinding(output_, *edges); !flip.empty()) {
+    oriented_.assign(output.begin(), output.end());
+    for (std::size_t t = 0; t < flip.size(); ++t)
+      if (flip[t]) std::swap(oriented_[t][1], oriented_[t][2]);
+    output_ = oriented_;
+    edges.emplace(output_);
+  }
+  normal_.reserve(output_.size());
+  sphere_.reserve(output_.size());
+  across_.assign(output_.size(), {kNone, kNone, kNone});
+  for (std::size_t t = 0; t < output_.size(); ++t) {
+    const Triangle3d& tri = output_[t];
     normal_.push_back(cross(sub(tri[1], tri[0]), sub(tri[2], tri[0])));
     const Sphere sphere = bounding_sphere(tri[0], tri[1], tri[2]);
     sphere_.push_back({sphere.center, sphere.radius * (1.0 + 1e-9)});
-  }
-  // each edge's first other triangle that runs it backwards: equal positions, equal signatures
-  across_.assign(output.size(), {kNone, kNone, kNone});
-  for (std::size_t edge = 0; edge < edges; ++edge) {
-    const std::size_t t = edge / 3, k = edge % 3;
-    const Vec3d &from = output[t][k + 1 == 3 ? 0 : k + 1], &to = output[t][k];
-    for (std::uint32_t m = head[back[edge] & mask]; m != kNone; m = next[m]) {
-      const Triangle3d& other = output[m / 3];
-      const std::size_t j = m % 3;
-      if (m / 3 != t && signature[m] == back[edge] && other[j] == from && other[j + 1 == 3 ? 0 : j + 1] == to) {
+    // each edge's first other triangle that runs it backwards
+    for (std::size_t k = 0; k < 3; ++k)
+      edges->others(3 * t + k, true, [&](std::uint32_t m) {
         across_[t][k] = m / 3;
-        break;
-      }
-    }
+        return true;
+      });
   }
 }
 
@@ -211,7 +302,10 @@ bool PartBounder::Prism::offer(std::uint32_t candidate) {
   const Triangle3d& tri = bounder_.output_[candidate];
   const Vec3d& normal = bounder_.normal_[candidate];
   const double facing = dot(normal, unit_);
-  if (!(facing > 0.0)) return false;  // faces away, or stands on edge: its prism is flat
+  if (!(facing > 0.0)) {  // faces away (kept for the reversed part: bound2), or stands on edge: its prism is flat
+    if (facing < 0.0 && facing_away_count_ < kMaxPieces) facing_away_[facing_away_count_++] = candidate;
+    return false;
+  }
   Point2 corner[3];
   for (std::size_t j = 0; j < 3; ++j) {
     const Vec3d r = sub(tri[j], part_[0]);
@@ -311,6 +405,18 @@ bool PartBounder::Prism::closed() const {
       if (!across) return false;
     }
   return true;
+}
+
+double PartBounder::Prism::bound2() const {
+  if (covers_) return worst2_;
+  if (facing_away_count_ == 0 || twice_area_ == 0.0) return std::numeric_limits<double>::infinity();
+  // The part wound the other way, over the candidates that face away from it: where the output
+  // or the input is wound inconsistently, these are the ones that lie along it.
+  const Triangle3d reversed{part_[0], part_[2], part_[1]};
+  Prism back(bounder_, reversed, enough2_);
+  for (std::size_t i = 0; i < facing_away_count_; ++i)
+    if (back.offer(facing_away_[i])) break;
+  return back.covers_ ? back.worst2_ : std::numeric_limits<double>::infinity();
 }
 
 double PartBounder::prism_bound2(const Triangle3d& part, std::span<const std::uint32_t> candidates,

@@ -24,7 +24,9 @@ class PartBounder {
  public:
   // `output`: the output mesh's triangles (double corners), indexed as the candidates below;
   // borrowed, must outlive the bounder. Keeps 68 bytes per triangle (normal, bounding sphere,
-  // the triangles across its edges).
+  // the triangles across its edges), and a copy of the output re-wound where its winding is
+  // inconsistent (across an edge of two triangles, both run it the same way): the prism pieces
+  // need neighbours that face alike. Distances do not depend on the winding.
   explicit PartBounder(std::span<const Triangle3d> output);
 
   double distance2(const Vec3d& p, std::uint32_t triangle) const;
@@ -56,7 +58,9 @@ class PartBounder {
   // The candidates are taken in order until their areas add up (best first: the ones after could
   // only overlap); +infinity when they never do, or do without that proof. Corners whose
   // distance along the normal to their candidate's plane is within `enough2` are not measured
-  // exactly (that distance bounds theirs; below `enough2` it cannot raise a total).
+  // exactly (that distance bounds theirs; below `enough2` it cannot raise a total). Where the
+  // candidates facing like the part do not cover it, those facing away are tried for the part
+  // wound the other way (an input wound inconsistently has parts facing away from the surface).
   double prism_bound2(const Triangle3d& part, std::span<const std::uint32_t> candidates, double enough2) const;
 
   // prism_bound2 one candidate at a time, for callers that find more candidates only when the
@@ -68,8 +72,9 @@ class PartBounder {
     // cover the part (further candidates could only overlap), or never will (their areas add up
     // without the proof of cover, a degenerate part, too many pieces).
     bool offer(std::uint32_t candidate);
-    // The bound of the pieces once they cover the part, +infinity before or when they never will.
-    double bound2() const { return covers_ ? worst2_ : std::numeric_limits<double>::infinity(); }
+    // The bound of the pieces once they cover the part; else, when the candidates offered that
+    // face away from it cover it wound the other way, theirs; +infinity when neither does.
+    double bound2() const;
 
    private:
     static constexpr std::size_t kMaxPieces = 64;
@@ -86,6 +91,8 @@ class PartBounder {
     std::size_t piece_count_ = 0;
     std::uint32_t piece_triangle_[kMaxPieces];  // the candidates with a piece
     unsigned piece_open_[kMaxPieces];           // the prism sides their pieces end at inside the part
+    std::size_t facing_away_count_ = 0;
+    std::uint32_t facing_away_[kMaxPieces];  // the candidates within reach that face away from the part
   };
 
   // The prism pieces when they cover the part within `enough2`; else the smaller of them and the
@@ -104,6 +111,7 @@ class PartBounder {
   static constexpr int kMaxRefineDepth = 4;
 
  private:
+  std::vector<Triangle3d> oriented_;  // the output re-wound consistently, where it was not (then output_)
   std::span<const Triangle3d> output_;
   std::vector<Vec3d> normal_;    // per output triangle: twice its area times its unit normal
   std::vector<Sphere> sphere_;   // per output triangle: bounding_sphere, widened by a hair for rounding
