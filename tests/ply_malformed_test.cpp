@@ -121,6 +121,8 @@ std::vector<MalformedCase> malformed_cases() {
        "face 0 has 2 vertices (a polygon needs 3 to 1048576)"},
       {"ListCountZero", ascii_mesh(kGoodVertices, "0         \n"), ErrorCode::bad_input, "line 13",
        "face 0 has 0 vertices"},
+      {"ListCountZeroInATightFile", ascii_mesh("0 0 0\n1 0 0\n0 1 0\n", "0\n"), ErrorCode::bad_input, "line 7",
+       "truncated file or corrupt count (or faces of fewer than 3 vertices, which are not polygons)"},
       {"ListCountOver2To20",
        std::string("ply\nformat ascii 1.0\nelement vertex 3\n") + kXyz +
            "element face 1\nproperty list uint int vertex_indices\nend_header\n" + kGoodVertices +

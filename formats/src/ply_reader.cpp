@@ -161,13 +161,16 @@ Status check_counts(const ply::Header& header, const Plan& plan, std::uint64_t f
     std::uint64_t bytes = 0;
     const bool overflow = __builtin_mul_overflow(element.count, each, &bytes) ||
                           __builtin_add_overflow(total, bytes, &total);
+    const bool has_faces = std::any_of(element.properties.begin(), element.properties.end(),
+                                       [](const PropertyPlan& p) { return p.is_index_list; });
     if (overflow || total > body + allowance)
       return bad_input_error(ply::message_at_line(
           path, header.elements[i].line,
           "element '" + element.name + "' declares " + std::to_string(element.count) +
               " entries of at least " + std::to_string(each) +
               " bytes each, more than the file can hold (" + std::to_string(body) +
-              " bytes follow the header): truncated file or corrupt count"));
+              " bytes follow the header): truncated file or corrupt count" +
+              (has_faces ? " (or faces of fewer than 3 vertices, which are not polygons)" : "")));
   }
   return {};
 }
