@@ -5,7 +5,6 @@
 #include <bit>
 #include <cmath>
 #include <limits>
-#include <optional>
 
 namespace octolod::bake {
 namespace {
@@ -144,29 +143,45 @@ class DirectedEdges {
   std::size_t mask_;
 };
 
-// Which triangles to re-wind so that across every manifold edge (two triangles on it) the two
-// run it opposite ways, where they can: in each connected piece whose winding is inconsistent,
-// the part of the smaller area. Empty when none needs it. An inconsistently wound output keeps
-// the prism pieces from tiling a part's shadow (they take the candidates facing like the part);
-// inconsistent means at least a quarter of the piece's manifold edges run alike on both sides
-// (on 1M rocks at most 7%: the clustering's folds, triangles re-wound to face like their
-// sources, which the prism needs as they are; a mesh wound at random: 45-55%).
-std::vector<std::uint8_t> rewinding(std::span<const Triangle3d> triangles, const DirectedEdges& edges) {
-  constexpr std::uint32_t kNoTriangle = 0xFFFFFFFFu;
+using Across = std::array<std::uint32_t, 3>;
+constexpr std::uint32_t kNoTriangle = 0xFFFFFFFFu;
+
+// Per triangle and edge k (corner k to k + 1): the first other triangle that runs it backwards.
+std::vector<Across> triangles_across(std::size_t triangle_count, const DirectedEdges& edges) {
+  std::vector<Across> across(triangle_count, {kNoTriangle, kNoTriangle, kNoTriangle});
+  for (std::size_t t = 0; t < triangle_count; ++t)
+    for (std::size_t k = 0; k < 3; ++k)
+      edges.others(3 * t + k, true, [&](std::uint32_t m) {
+        across[t][k] = m / 3;
+        return true;
+      });
+  return across;
+}
+
+// Which triangles to re-wind so that across every shared edge the two triangles run it
+// opposite ways, where they can: in each connected piece whose winding is inconsistent, the
+// part of the smaller area. Empty when none needs it. An inconsistently wound output keeps the
+// prism pieces from tiling a part's shadow (they take the candidates facing like the part).
+// Inconsistent means at least a quarter of the piece's shared edges have only triangles that run
+// them alike (just one) on the other side (on 1M rocks at most 7%: the clustering's folds,
+// triangles re-wound to face like their sources, which the prism needs as they are; a mesh
+// wound at random: 45-55%). `across` is triangles_across.
+std::vector<std::uint8_t> rewinding(std::span<const Triangle3d> triangles, const DirectedEdges& edges,
+                                    const std::vector<Across>& across) {
   const std::size_t edge_count = 3 * triangles.size();
-  std::vector<std::uint32_t> neighbour(edge_count, kNoTriangle);  // across a manifold edge
-  std::vector<std::uint8_t> alike(edge_count, 0);                 // it runs the edge the same way
+  std::vector<std::uint32_t> neighbour(edge_count, kNoTriangle);
+  std::vector<std::uint8_t> alike(edge_count, 0);  // the neighbour runs the edge the same way
   bool any_alike = false;
   for (std::size_t edge = 0; edge < edge_count; ++edge) {
-    std::uint32_t found = kNoTriangle, count = 0;
-    for (const bool backwards : {true, false})
-      edges.others(edge, backwards, [&](std::uint32_t m) {
-        found = m / 3;
-        alike[edge] = !backwards;
-        return ++count > 1;
-      });
-    if (count != 1) continue;
-    neighbour[edge] = found;
+    neighbour[edge] = across[edge / 3][edge % 3];
+    if (neighbour[edge] != kNoTriangle) continue;
+    std::uint32_t count = 0;
+    edges.others(edge, false, [&](std::uint32_t m) {
+      neighbour[edge] = m / 3;
+      return ++count > 1;
+    });
+    if (count > 1) neighbour[edge] = kNoTriangle;
+    alike[edge] = neighbour[edge] != kNoTriangle;
     any_alike = any_alike || alike[edge];
   }
   if (!any_alike) return {};
@@ -178,7 +193,7 @@ std::vector<std::uint8_t> rewinding(std::span<const Triangle3d> triangles, const
     piece.assign(1, static_cast<std::uint32_t>(seed));
     seen[seed] = 1;
     double flipped_area = 0.0, kept_area = 0.0;
-    std::size_t manifold_edges = 0, alike_edges = 0;
+    std::size_t shared_edges = 0, alike_edges = 0;
     for (std::size_t i = 0; i < piece.size(); ++i) {
       const std::uint32_t t = piece[i];
       const Triangle3d& tri = triangles[t];
@@ -187,7 +202,7 @@ std::vector<std::uint8_t> rewinding(std::span<const Triangle3d> triangles, const
       for (std::size_t k = 0; k < 3; ++k) {
         const std::uint32_t other = neighbour[3 * t + k];
         if (other == kNoTriangle) continue;
-        ++manifold_edges;
+        ++shared_edges;
         alike_edges += alike[3 * t + k];
         if (seen[other]) continue;
         seen[other] = 1;
@@ -195,7 +210,7 @@ std::vector<std::uint8_t> rewinding(std::span<const Triangle3d> triangles, const
         piece.push_back(other);
       }
     }
-    const bool inconsistent = 4 * alike_edges >= manifold_edges && alike_edges > 0;
+    const bool inconsistent = alike_edges > 0 && 4 * alike_edges >= shared_edges;
     for (const std::uint32_t t : piece) flip[t] = inconsistent && (flip[t] != 0) == (kept_area >= flipped_area);
     any_flip = any_flip || inconsistent;
   }
@@ -210,28 +225,23 @@ std::uint32_t closest_triangle(const measure::TriangleBvh& bvh, const Vec3d& p) 
 }
 
 PartBounder::PartBounder(std::span<const Triangle3d> output) : output_(output) {
-  std::optional<DirectedEdges> edges(std::in_place, output_);
-  if (const std::vector<std::uint8_t> flip = rewinding(output_, *edges); !flip.empty()) {
-    oriented_.assign(output.begin(), output.end());
-    for (std::size_t t = 0; t < flip.size(); ++t)
-      if (flip[t]) std::swap(oriented_[t][1], oriented_[t][2]);
-    output_ = oriented_;
-    edges.emplace(output_);
+  {
+    const DirectedEdges edges(output_);
+    across_ = triangles_across(output_.size(), edges);
+    if (const std::vector<std::uint8_t> flip = rewinding(output_, edges, across_); !flip.empty()) {
+      oriented_.assign(output.begin(), output.end());
+      for (std::size_t t = 0; t < flip.size(); ++t)
+        if (flip[t]) std::swap(oriented_[t][1], oriented_[t][2]);
+      output_ = oriented_;
+    }
   }
+  if (!oriented_.empty()) across_ = triangles_across(output_.size(), DirectedEdges(output_));
   normal_.reserve(output_.size());
   sphere_.reserve(output_.size());
-  across_.assign(output_.size(), {kNone, kNone, kNone});
-  for (std::size_t t = 0; t < output_.size(); ++t) {
-    const Triangle3d& tri = output_[t];
+  for (const Triangle3d& tri : output_) {
     normal_.push_back(cross(sub(tri[1], tri[0]), sub(tri[2], tri[0])));
     const Sphere sphere = bounding_sphere(tri[0], tri[1], tri[2]);
     sphere_.push_back({sphere.center, sphere.radius * (1.0 + 1e-9)});
-    // each edge's first other triangle that runs it backwards
-    for (std::size_t k = 0; k < 3; ++k)
-      edges->others(3 * t + k, true, [&](std::uint32_t m) {
-        across_[t][k] = m / 3;
-        return true;
-      });
   }
 }
 
