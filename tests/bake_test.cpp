@@ -156,7 +156,7 @@ std::vector<Triangle> input_triangles(const fs::path& ply, const fs::path& work,
     for (std::size_t i = 0; i < records.size(); i += record_bytes) {
       Triangle t(3 * layout.floats());
       for (int c = 0; c < 3; ++c)
-        load_soup_corner(records.data() + i, layout, c, t.data() + c * layout.floats());
+        load_soup_corner(records.data() + i, layout, c, t.data() + static_cast<std::size_t>(c) * layout.floats());
       out.push_back(std::move(t));
     }
     return Status{};
@@ -190,7 +190,7 @@ std::vector<Triangle> mesh_triangles(const NodeMesh& mesh) {
 }
 
 bool inside(const Bounds& outer, const Bounds& inner) {
-  for (int a = 0; a < 3; ++a)
+  for (std::size_t a = 0; a < 3; ++a)
     if (inner.min[a] < outer.min[a] || inner.max[a] > outer.max[a]) return false;
   return true;
 }
@@ -260,7 +260,7 @@ void BakeTest::expect_leaves_hold_exactly_the_input_triangles(std::uint64_t budg
     // Each triangle's centroid lies in the leaf's cell (up to float rounding of the cell).
     const float slack = (n.cell.max[0] - n.cell.min[0]) * 1e-4f;
     for (const Triangle& t : mesh_triangles(mesh.value())) {
-      for (int a = 0; a < 3; ++a) {
+      for (std::size_t a = 0; a < 3; ++a) {
         const float c = (t[static_cast<std::size_t>(a)] + t[layout.floats() + static_cast<std::size_t>(a)] +
                          t[2 * layout.floats() + static_cast<std::size_t>(a)]) / 3.0f;
         EXPECT_GE(c, n.cell.min[a] - slack);

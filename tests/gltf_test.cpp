@@ -200,7 +200,7 @@ TEST(Gltf, ThirtyTwoBitIndicesPastSixtyFiveThousandVertices) {
   mesh.indices = {0, 1, 69999, 65535, 65536, 2};
   const std::vector<std::byte> glb = encode(std::span(&mesh, 1));
   const json document = glb_json(glb);
-  const int indices = document["meshes"][0]["primitives"][0]["indices"];
+  const std::size_t indices = document["meshes"][0]["primitives"][0]["indices"];
   EXPECT_EQ(document["accessors"][indices]["componentType"], 5125);
   Result<std::vector<NodeMesh>> back = decode_gltf(glb, "big.glb");
   ASSERT_TRUE(back.ok()) << back.status().message();
@@ -222,8 +222,8 @@ TEST(Gltf, WritesOneNamedNodeAndMeshPerNodeMeshWithPositionBounds) {
   EXPECT_EQ(primitive["mode"], 4);
   EXPECT_TRUE(primitive["attributes"].contains("NORMAL"));
   EXPECT_FALSE(primitive["attributes"].contains("COLOR_0"));
-  EXPECT_EQ(document["accessors"][primitive["indices"].get<int>()]["componentType"], 5123);
-  const json& position = document["accessors"][primitive["attributes"]["POSITION"].get<int>()];
+  EXPECT_EQ(document["accessors"][primitive["indices"].get<std::size_t>()]["componentType"], 5123);
+  const json& position = document["accessors"][primitive["attributes"]["POSITION"].get<std::size_t>()];
   EXPECT_EQ(position["min"], json::array({0.0, 0.0, -2.0}));
   EXPECT_EQ(position["max"], json::array({1.0, 1.0, -2.0}));
   EXPECT_EQ(document["asset"]["version"], "2.0");
@@ -389,7 +389,7 @@ TEST(Gltf, DracoRoundTripStaysWithinQuantizationAndKeepsTriangles) {
     const json document = glb_json(glb);
     const json& position =
         document["accessors"]
-                [document["meshes"][0]["primitives"][0]["attributes"]["POSITION"].get<int>()];
+                [document["meshes"][0]["primitives"][0]["attributes"]["POSITION"].get<std::size_t>()];
     const Bounds decoded_bounds = decoded.bounds();
     for (std::size_t k = 0; k < 3; ++k) {
       EXPECT_EQ(position["min"][k].get<float>(), decoded_bounds.min[k]);
@@ -578,9 +578,9 @@ TEST(Gltf, InconsistentStructureIsBadInputWithWhatWasWrong) {
   // An index past the vertex count (indices are the last bufferView: quad index 3 -> 4).
   std::vector<std::byte> bin = glb_bin(glb);
   const json document = glb_json(glb);
-  const int indices = document["meshes"][0]["primitives"][0]["indices"];
+  const std::size_t indices = document["meshes"][0]["primitives"][0]["indices"];
   const std::size_t at =
-      document["bufferViews"][document["accessors"][indices]["bufferView"].get<int>()]
+      document["bufferViews"][document["accessors"][indices]["bufferView"].get<std::size_t>()]
               ["byteOffset"];
   bin[at] = std::byte{4};
   Result<std::vector<NodeMesh>> r = decode_gltf(make_glb(document, bin), "index.glb");

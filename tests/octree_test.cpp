@@ -51,7 +51,7 @@ TEST(Morton, ChildCellsNestInTheirParentAndTileIt) {
   b.max = {1.3f, 2, 7.5f};
   const RootCube cube = RootCube::around(b);
   const Bounds root = cube.cell(0, 0);
-  for (int a = 0; a < 3; ++a) {
+  for (std::size_t a = 0; a < 3; ++a) {
     EXPECT_LE(root.min[a], b.min[a]);
     EXPECT_GE(root.max[a], b.max[a]);
   }
@@ -59,7 +59,7 @@ TEST(Morton, ChildCellsNestInTheirParentAndTileIt) {
     const Bounds p = cube.cell(parent, 2);
     for (std::uint64_t octant = 0; octant < 8; ++octant) {
       const Bounds c = cube.cell(parent << 3 | octant, 3);
-      for (int a = 0; a < 3; ++a) {
+      for (std::size_t a = 0; a < 3; ++a) {
         EXPECT_GE(c.min[a], p.min[a]);
         EXPECT_LE(c.max[a], p.max[a]);
         const bool upper = ((octant >> a) & 1u) != 0;

@@ -102,7 +102,7 @@ std::map<std::pair<std::size_t, std::size_t>, int> directed_edges(
     const Mesh& mesh, const std::vector<std::size_t>& key, std::size_t begin, std::size_t end) {
   std::map<std::pair<std::size_t, std::size_t>, int> edges;
   for (std::size_t t = begin; t < end; ++t)
-    for (int c = 0; c < 3; ++c)
+    for (std::size_t c = 0; c < 3; ++c)
       ++edges[{key[mesh.triangles[3 * t + c]], key[mesh.triangles[3 * t + (c + 1) % 3]]}];
   return edges;
 }
@@ -308,7 +308,7 @@ TEST(SampleRock, NoTriangleStraddlesTheSeam) {
   const Mesh mesh = generate(spec_of(Shape::rock, 5000));
   for (std::size_t t = 0; t < mesh.triangle_count(); ++t) {
     float lo = 2, hi = -1;
-    for (int c = 0; c < 3; ++c) {
+    for (std::size_t c = 0; c < 3; ++c) {
       const std::uint32_t v = mesh.triangles[3 * t + c];
       if (mesh.uv(v)[1] == 0.0f || mesh.uv(v)[1] == 1.0f) continue;  // poles have no longitude
       lo = std::min(lo, mesh.uv(v)[0]);
@@ -333,8 +333,8 @@ TEST(SampleCity, EveryBoxIsClosedAndFlatShaded) {
   for (std::size_t t = 0; t < mesh.triangle_count(); ++t) {
     const std::array<double, 3> n = face_normal(mesh, t);
     const double length = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
-    for (int c = 0; c < 3; ++c)
-      for (int k = 0; k < 3; ++k)
+    for (std::size_t c = 0; c < 3; ++c)
+      for (std::size_t k = 0; k < 3; ++k)
         ASSERT_NEAR(mesh.normal(mesh.triangles[3 * t + c])[k], n[k] / length, 1e-6)
             << "vertex normals are the face normal (flat shading), triangle " << t;
   }
@@ -434,7 +434,7 @@ TEST(SampleAttributes, RockVertexNormalsFaceOutwardAlongTheSurface) {
   const Mesh mesh = generate(spec_of(Shape::rock, 50000));
   for (std::size_t t = 0; t < mesh.triangle_count(); ++t) {
     const std::array<double, 3> n = face_normal(mesh, t);
-    for (int c = 0; c < 3; ++c) {
+    for (std::size_t c = 0; c < 3; ++c) {
       const float* vn = mesh.normal(mesh.triangles[3 * t + c]);
       ASSERT_GT(n[0] * vn[0] + n[1] * vn[1] + n[2] * vn[2], 0.0) << "triangle " << t;
     }

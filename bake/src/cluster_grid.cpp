@@ -340,7 +340,10 @@ Clustering adaptive_grid_clustering(const PreparedNode& node, std::size_t target
   std::vector<std::uint64_t> fine_keys = vertex_keys(node, fine);
   for (std::uint64_t& key : fine_keys)
     if (!(key & kLockedKey)) key |= kFineKey;
-  const auto [coarse_id, coarse_distinct] = dense_ids(coarse_keys, false);
+  // (not a structured binding: the lambdas below capture them, which clang before 16 refuses)
+  const auto coarse_ids = dense_ids(coarse_keys, false);
+  const std::vector<std::uint32_t>& coarse_id = coarse_ids.first;
+  const std::vector<std::uint64_t>& coarse_distinct = coarse_ids.second;
   const std::vector<std::uint32_t> fine_id = dense_ids(fine_keys, false).first;
   const auto [order, coarse_quadric, coarse_minimizer] = clusters_by_error(node, coarse_id, coarse_distinct);
   std::vector<std::uint32_t> rank(coarse_distinct.size(), UINT32_MAX);

@@ -336,7 +336,7 @@ class ExternalSorter final : public RecordSorter {
   void start_merger() {
     merge_block_records_ = out_bytes_ / record_bytes_ / 2;
     merger_ = std::thread([this] {
-      for (int b = 0;; b ^= 1) {
+      for (std::size_t b = 0;; b ^= 1) {
         {
           std::unique_lock lock(merge_mutex_);
           merge_cv_.wait(lock, [&] { return merge_stop_ || !block_busy_[b]; });

@@ -47,12 +47,12 @@ struct RootCube {
     RootCube cube;
     if (bounds.empty()) return cube;
     double extent = 0;
-    for (int a = 0; a < 3; ++a)
+    for (std::size_t a = 0; a < 3; ++a)
       extent = std::max(extent, static_cast<double>(bounds.max[a]) - bounds.min[a]);
     const double magnitude = bounds.largest_magnitude();
     // Float positions are only precise to ~1e-7 of their magnitude: keep the margin above it.
     const double margin = std::max(extent, magnitude) * 0x1p-20 + 0x1p-100;
-    for (int a = 0; a < 3; ++a) cube.origin[a] = static_cast<double>(bounds.min[a]) - margin;
+    for (std::size_t a = 0; a < 3; ++a) cube.origin[a] = static_cast<double>(bounds.min[a]) - margin;
     cube.size = extent + 2 * margin;
     return cube;
   }
@@ -63,11 +63,11 @@ struct RootCube {
     std::uint32_t c[3] = {0, 0, 0};
     for (std::uint32_t k = 0; k < depth; ++k) {
       const auto octant = static_cast<std::uint32_t>(prefix >> (3 * (depth - 1 - k))) & 7u;
-      for (int a = 0; a < 3; ++a) c[a] = (c[a] << 1) | ((octant >> a) & 1u);
+      for (std::size_t a = 0; a < 3; ++a) c[a] = (c[a] << 1) | ((octant >> a) & 1u);
     }
     const double cell_size = std::ldexp(size, -static_cast<int>(depth));
     Bounds b;
-    for (int a = 0; a < 3; ++a) {
+    for (std::size_t a = 0; a < 3; ++a) {
       b.min[a] = static_cast<float>(origin[a] + c[a] * cell_size);
       b.max[a] = static_cast<float>(origin[a] + (c[a] + 1.0) * cell_size);
     }
@@ -82,7 +82,7 @@ class MortonQuantizer {
       : origin_(cube.origin),
         scale_(std::ldexp(1.0, static_cast<int>(depth)) / cube.size),
         last_(depth == 0 ? 0 : (std::uint32_t{1} << depth) - 1) {
-    for (int a = 0; a < 3; ++a) origin3_[a] = 3 * origin_[a];
+    for (std::size_t a = 0; a < 3; ++a) origin3_[a] = 3 * origin_[a];
     third_scale_ = scale_ / 3;
   }
 

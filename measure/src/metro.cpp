@@ -201,7 +201,10 @@ Deviation to_deviation(const Partial& p, VertexLayout compared, double diagonal)
   d.mean_relative = d.mean / diagonal;
   d.rms_relative = d.rms / diagonal;
   d.max_relative = d.max / diagonal;
-  for (int k = 0; k < 3; ++k) d.max_at[k] = p.max_at[k], d.max_closest[k] = p.max_closest[k];
+  for (glm::length_t k = 0; k < 3; ++k) {
+    const auto i = static_cast<std::size_t>(k);
+    d.max_at[i] = p.max_at[k], d.max_closest[i] = p.max_closest[k];
+  }
   if (compared.normal && p.normal_samples > 0) {
     d.normal_mean_degrees = p.normal_sum / static_cast<double>(p.normal_samples);
     d.normal_max_degrees = p.normal_max;

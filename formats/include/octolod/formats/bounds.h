@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstddef>
 #include <limits>
 
 namespace octolod {
@@ -17,26 +18,26 @@ struct Bounds {
 
   bool empty() const { return min[0] > max[0] || min[1] > max[1] || min[2] > max[2]; }
   void extend(const float* p) {
-    for (int i = 0; i < 3; ++i) {
+    for (std::size_t i = 0; i < 3; ++i) {
       min[i] = std::min(min[i], p[i]);
       max[i] = std::max(max[i], p[i]);
     }
   }
   void extend(const Bounds& b) {
-    for (int i = 0; i < 3; ++i) {
+    for (std::size_t i = 0; i < 3; ++i) {
       min[i] = std::min(min[i], b.min[i]);
       max[i] = std::max(max[i], b.max[i]);
     }
   }
   bool contains(const float* p) const {
-    for (int i = 0; i < 3; ++i)
+    for (std::size_t i = 0; i < 3; ++i)
       if (p[i] < min[i] || p[i] > max[i]) return false;
     return true;
   }
   // Length of the box's diagonal, in double (0 for a point; meaningless when empty).
   double diagonal() const {
     double sum = 0.0;
-    for (int i = 0; i < 3; ++i) {
+    for (std::size_t i = 0; i < 3; ++i) {
       const double side = static_cast<double>(max[i]) - min[i];
       sum += side * side;
     }
@@ -47,7 +48,7 @@ struct Bounds {
   double largest_magnitude() const {
     if (empty()) return 0.0;
     double largest = 0.0;
-    for (int i = 0; i < 3; ++i)
+    for (std::size_t i = 0; i < 3; ++i)
       largest = std::max({largest, std::abs(static_cast<double>(min[i])), std::abs(static_cast<double>(max[i]))});
     return largest;
   }
