@@ -1,5 +1,6 @@
 #include <gtest/gtest.h>
 
+#include <array>
 #include <fstream>
 #include <sstream>
 #include <vector>
@@ -48,6 +49,22 @@ TEST(Manifest, JsonRoundTripKeepsEveryField) {
   EXPECT_EQ(back->nodes[0].child_mask(), 0b100001);
   EXPECT_EQ(back->layout, m.layout);
   EXPECT_DOUBLE_EQ(back->nodes[0].lods[0].error, 0.25);
+}
+
+TEST(Manifest, OriginKeepsEveryDigitAndDefaultsToZeroWhenAbsent) {
+  Manifest m = small_manifest();
+  m.origin = {4000000.0, -500001.0, 0.1};
+  Result<Manifest> back = manifest_from_json(manifest_to_json(m), "m.json");
+  ASSERT_TRUE(back.ok()) << back.status().message();
+  EXPECT_EQ(back->origin, m.origin);
+  // a manifest from before the origin existed
+  nlohmann::json old = nlohmann::json::parse(manifest_to_json(small_manifest()));
+  old.erase("origin");
+  Result<Manifest> older = manifest_from_json(old.dump(), "old.json");
+  ASSERT_TRUE(older.ok()) << older.status().message();
+  EXPECT_EQ(older->origin, (std::array<double, 3>{0.0, 0.0, 0.0}));
+  old["origin"] = {1.0, 2.0};
+  EXPECT_FALSE(manifest_from_json(old.dump(), "short.json").ok());
 }
 
 // The manifest is written node by node, never as one document: its text must still be exactly

@@ -336,7 +336,7 @@ TEST(PlyTruncation, EveryLengthFailsCleanly) {
     const bool big = format == PlyFormat::binary_big_endian;
     // Write the vertices with PlyWriter, then replace the face element with 100 quads.
     const auto source = dir.file("source.ply");
-    ASSERT_TRUE(write_ply(source, {format, layout, PlyColorType::uchar, {}}, strip.vertices, {}).ok());
+    ASSERT_TRUE(write_ply(source, {format, layout, PlyColorType::uchar, {}, {}}, strip.vertices, {}).ok());
     std::string bytes = test::read_bytes(source);
     const std::string old_faces = "element face 0\n";
     bytes.replace(bytes.find(old_faces), old_faces.size(), "element face 100\n");
@@ -361,7 +361,7 @@ TEST(PlyTruncation, EveryLengthFailsCleanly) {
     const auto cut = dir.file("cut.ply");
     for (std::size_t length = 0; length < bytes.size(); ++length) {
       write_bytes(cut, std::string_view(bytes).substr(0, length));
-      auto reader = PlyReader::open(cut, PlyReadOptions{4096});
+      auto reader = PlyReader::open(cut, test::small_batches());
       Status status = status_of(reader);
       while (status.ok()) {
         auto batch = reader.value()->next();

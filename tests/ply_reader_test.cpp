@@ -3,6 +3,8 @@
 // aliases, scalar types, polygon fans, and the trailing-bytes rule.
 #include <gtest/gtest.h>
 
+#include <array>
+#include <cstdio>
 #include <string>
 #include <vector>
 
@@ -50,10 +52,10 @@ TEST_P(PlyRoundTrip, EveryFormatPairIsBitExact) {
       SCOPED_TRACE(std::string(to_string(first)) + " -> " + std::string(to_string(second)));
       const auto a = dir.file("a.ply");
       const auto b = dir.file("b.ply");
-      ASSERT_TRUE(write_ply(a, {first, layout, color_type, {"first"}}, mesh.vertices,
+      ASSERT_TRUE(write_ply(a, {first, layout, color_type, {"first"}, {}}, mesh.vertices,
                             mesh.triangles).ok());
       const PlyMesh once = read_ok(a);
-      ASSERT_TRUE(write_ply(b, {second, layout, color_type, {}}, once.vertices, once.triangles).ok());
+      ASSERT_TRUE(write_ply(b, {second, layout, color_type, {}, {}}, once.vertices, once.triangles).ok());
       const PlyMesh twice = read_ok(b);
 
       EXPECT_EQ(twice.info.format, second);
@@ -95,9 +97,9 @@ TEST(PlyReader, StreamsInBatchesNoLargerThanTheBuffer) {
   for (PlyFormat format : kFormats) {
     SCOPED_TRACE(std::string(to_string(format)));
     const auto path = dir.file("stream.ply");
-    ASSERT_TRUE(write_ply(path, {format, layout, PlyColorType::uchar, {}}, mesh.vertices,
+    ASSERT_TRUE(write_ply(path, {format, layout, PlyColorType::uchar, {}, {}}, mesh.vertices,
                           mesh.triangles).ok());
-    auto reader = PlyReader::open(path, PlyReadOptions{4096});
+    auto reader = PlyReader::open(path, test::small_batches());
     ASSERT_TRUE(reader.ok()) << reader.status().message();
     std::vector<float> vertices;
     std::vector<std::uint32_t> triangles;
@@ -160,7 +162,7 @@ TEST(PlyReader, HugePolygonFanSpansBatches) {
     }
     const auto path = dir.file("polygon.ply");
     write_bytes(path, text);
-    auto reader = PlyReader::open(path, PlyReadOptions{4096});
+    auto reader = PlyReader::open(path, test::small_batches());
     ASSERT_TRUE(reader.ok()) << reader.status().message();
     std::vector<std::uint32_t> triangles;
     int batches = 0;
@@ -350,6 +352,89 @@ TEST(PlyReader, BigEndianDoublesAndWideColours) {
   EXPECT_EQ(mesh.triangles, (std::vector<std::uint32_t>{2, 0, 1}));
 }
 
+// A geo-referenced mesh: `n` vertices 1 mm apart along x, 4,000 km from the origin (where floats
+// are 0.25 apart), as double positions, ascii or little-endian binary.
+std::string far_double_mesh(PlyFormat format, int n, std::vector<std::array<double, 3>>& positions) {
+  std::string text = std::string("ply\nformat ") + (format == PlyFormat::ascii ? "ascii" : "binary_little_endian") +
+                     " 1.0\nelement vertex " + std::to_string(n) +
+                     "\nproperty double x\nproperty double y\nproperty double z\nelement face 1\n"
+                     "property list uchar int vertex_indices\nend_header\n";
+  positions.clear();
+  for (int i = 0; i < n; ++i) {
+    positions.push_back({4000000.375 + 0.001 * i, -500000.5, 12.25 + 0.001 * i});
+    for (double p : positions.back()) {
+      if (format == PlyFormat::ascii) {
+        char number[64];
+        std::snprintf(number, sizeof number, "%.17g ", p);
+        text += number;
+      } else {
+        append_scalar(text, p, false);
+      }
+    }
+    if (format == PlyFormat::ascii) text += "\n";
+  }
+  if (format == PlyFormat::ascii) return text + "3 0 1 2\n";
+  text += '\x03';
+  for (std::int32_t i : {0, 1, 2}) append_scalar(text, i, false);
+  return text;
+}
+
+TEST(PlyReader, DoublePositionsAreRecentredOnTheFirstVertexBeforeRoundingToFloat) {
+  ScratchDir dir;
+  for (PlyFormat format : {PlyFormat::ascii, PlyFormat::binary_little_endian}) {
+    SCOPED_TRACE(std::string(to_string(format)));
+    std::vector<std::array<double, 3>> positions;
+    const auto path = dir.file("far.ply");
+    write_bytes(path, far_double_mesh(format, 500, positions));  // binary: several batches, the fast path
+    PlyReadOptions options = test::small_batches();
+    options.recentre_double_positions = true;
+    Result<PlyMesh> mesh = read_ply(path, options);
+    ASSERT_TRUE(mesh.ok()) << mesh.status().message();
+    EXPECT_TRUE(mesh->info.double_positions);
+    // the first vertex rounded to whole units (half away from zero)
+    EXPECT_EQ(mesh->info.position_origin, (std::array<double, 3>{4000000.0, -500001.0, 12.0}));
+    ASSERT_EQ(mesh->vertices.size(), 3 * positions.size());
+    for (std::size_t i = 0; i < positions.size(); ++i)
+      for (std::size_t k = 0; k < 3; ++k)
+        ASSERT_EQ(mesh->vertices[3 * i + k], static_cast<float>(positions[i][k] - mesh->info.position_origin[k]))
+            << "vertex " << i;
+    // 1 mm steps survive; without the origin, every x of the first 125 vertices is one float
+    EXPECT_NE(mesh->vertices[0], mesh->vertices[3]);
+    Result<PlyMesh> absolute = read_ply(path);
+    ASSERT_TRUE(absolute.ok());
+    EXPECT_EQ(absolute->info.position_origin, (std::array<double, 3>{0.0, 0.0, 0.0}));
+    EXPECT_EQ(absolute->vertices[0], absolute->vertices[3]);
+    // a given origin instead: the frame of another mesh
+    options.position_origin = std::array<double, 3>{4000000.0, -500000.0, 0.0};
+    Result<PlyMesh> framed = read_ply(path, options);
+    ASSERT_TRUE(framed.ok());
+    EXPECT_EQ(framed->info.position_origin, *options.position_origin);
+    EXPECT_EQ(framed->vertices[1], -0.5f);
+    EXPECT_EQ(framed->vertices[2], 12.25f);
+  }
+}
+
+TEST(PlyReader, FloatPositionsAreNotRecentredButTakeAGivenOrigin) {
+  ScratchDir dir;
+  const VertexLayout layout{false, false, false};
+  const test::TestMesh mesh = test::strip_mesh(layout, true, 5);
+  const auto path = dir.file("float.ply");
+  ASSERT_TRUE(write_ply(path, {PlyFormat::binary_little_endian, layout, PlyColorType::uchar, {}, {}}, mesh.vertices,
+                        mesh.triangles).ok());
+  PlyReadOptions options;
+  options.recentre_double_positions = true;
+  Result<PlyMesh> read = read_ply(path, options);
+  ASSERT_TRUE(read.ok());
+  EXPECT_FALSE(read->info.double_positions);
+  EXPECT_EQ(read->info.position_origin, (std::array<double, 3>{0.0, 0.0, 0.0}));
+  EXPECT_TRUE(same_bits(mesh.vertices, read->vertices));
+  options.position_origin = std::array<double, 3>{1.0, 2.0, 3.0};
+  Result<PlyMesh> shifted = read_ply(path, options);
+  ASSERT_TRUE(shifted.ok());
+  for (std::size_t i = 0; i < mesh.vertices.size(); ++i)
+    EXPECT_EQ(shifted->vertices[i], static_cast<float>(mesh.vertices[i] - (*options.position_origin)[i % 3]));
+}
+
 TEST(PlyReader, IntegerAndFloatColourTypes) {
   ScratchDir dir;
   const auto path = dir.file("colors.ply");
@@ -406,7 +491,7 @@ TEST(PlyReader, BinaryIgnoresTrailingBytes) {
   const test::TestMesh mesh = test::strip_mesh(VertexLayout{}, true);
   for (PlyFormat format : {PlyFormat::binary_little_endian, PlyFormat::binary_big_endian}) {
     const auto path = dir.file("trailing.ply");
-    ASSERT_TRUE(write_ply(path, {format, {}, PlyColorType::uchar, {}}, mesh.vertices,
+    ASSERT_TRUE(write_ply(path, {format, {}, PlyColorType::uchar, {}, {}}, mesh.vertices,
                           mesh.triangles).ok());
     write_bytes(path, test::read_bytes(path) + std::string("\0\0garbage\n", 10));
     const PlyMesh read = read_ok(path);

@@ -74,6 +74,13 @@ void append_scalar(std::string& out, T value, bool big_endian) {
 }
 
 // The float the reader produces for an 8-bit colour channel value k.
+// Reader options with the smallest batches (4 KiB): the batch-boundary paths run on small files.
+inline PlyReadOptions small_batches() {
+  PlyReadOptions options;
+  options.buffer_bytes = 4096;
+  return options;
+}
+
 inline float byte_color(int k) { return static_cast<float>(k / 255.0); }
 
 struct TestMesh {

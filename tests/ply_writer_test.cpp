@@ -5,6 +5,7 @@
 #include <sys/resource.h>
 
 #include <algorithm>
+#include <array>
 #include <csignal>
 #include <cstdlib>
 #include <string>
@@ -36,7 +37,7 @@ TEST(PlyWriter, AsciiBytesAreExact) {
                                        3e38f, 2, 1, 0, 1, 1.0f / 3.0f};
   ASSERT_TRUE(write_ply(path,
                         {PlyFormat::ascii, VertexLayout{false, true, false}, PlyColorType::uchar,
-                         {"made by octolod", ""}},
+                         {"made by octolod", ""}, {}},
                         vertices, std::vector<std::uint32_t>{0, 1, 0})
                   .ok());
   EXPECT_EQ(test::read_bytes(path),
@@ -56,7 +57,7 @@ TEST(PlyWriter, BinaryBytesAreExactInBothByteOrders) {
     const auto path = dir.file("tri.ply");
     ASSERT_TRUE(write_ply(path,
                           {big ? PlyFormat::binary_big_endian : PlyFormat::binary_little_endian,
-                           VertexLayout{false, false, true}, PlyColorType::uchar, {}},
+                           VertexLayout{false, false, true}, PlyColorType::uchar, {}, {}},
                           vertices, std::vector<std::uint32_t>{2, 1, 0})
                     .ok());
     std::string expected = std::string("ply\nformat ") +
@@ -78,7 +79,7 @@ TEST(PlyWriter, ColoursAreClampedAndRoundedOrKeptAsFloat) {
                                        0, 0, 0, std::numeric_limits<float>::quiet_NaN(),
                                        1.0f / 255.0f, 0.998f};
   const auto path = dir.file("colors.ply");
-  ASSERT_TRUE(write_ply(path, {PlyFormat::binary_little_endian, layout, PlyColorType::uchar, {}},
+  ASSERT_TRUE(write_ply(path, {PlyFormat::binary_little_endian, layout, PlyColorType::uchar, {}, {}},
                         vertices, {}).ok());
   auto mesh = read_ply(path);
   ASSERT_TRUE(mesh.ok()) << mesh.status().message();
@@ -86,11 +87,45 @@ TEST(PlyWriter, ColoursAreClampedAndRoundedOrKeptAsFloat) {
                                                 0, test::byte_color(1), test::byte_color(254)}));
   // float colours are written as they are, out-of-range values included
   const std::vector<float> wide = {0, 0, 0, -0.5f, 0.5f, 2.0f};
-  ASSERT_TRUE(write_ply(path, {PlyFormat::ascii, layout, PlyColorType::float32, {}}, wide, {}).ok());
+  ASSERT_TRUE(write_ply(path, {PlyFormat::ascii, layout, PlyColorType::float32, {}, {}}, wide, {}).ok());
   mesh = read_ply(path);
   ASSERT_TRUE(mesh.ok()) << mesh.status().message();
   EXPECT_EQ(mesh->info.color_type, PlyColorType::float32);
   EXPECT_EQ(mesh->vertices, wide);
+}
+
+TEST(PlyWriter, PositionsWithAnOriginAreWrittenAsDoublesAndReadBackExactly) {
+  // A quad of floats within a few units of 0 relative to a point 4,000 km out: written with the
+  // origin added in double, read relative to it again, every float comes back bit for bit (none
+  // is below 1/64, whose bits the doubles there, 2^-30 apart, hold; read as floats they would be
+  // 0.25 apart).
+  ScratchDir dir;
+  const VertexLayout layout{false, false, true};
+  struct {
+    std::vector<float> vertices{0.1f, -0.125f, 1.0f / 3.0f, 0.5f, 0.25f,  //
+                                1.001f, 0.0f, -2.5f, 1.0f, 0.0f,        //
+                                3.14159265f, 0.0625f, -0.03125f, 0.0f, 1.0f,  //
+                                -1.0f / 48.0f, 2.0f, 0.375f, 1.0f, 1.0f};
+    std::vector<std::uint32_t> triangles{0, 1, 2, 0, 2, 3};
+  } mesh;
+  const std::array<double, 3> origin{4000000.0, -500001.0, 12.0};
+  for (PlyFormat format : {PlyFormat::ascii, PlyFormat::binary_little_endian, PlyFormat::binary_big_endian}) {
+    SCOPED_TRACE(std::string(to_string(format)));
+    const auto path = dir.file("far.ply");
+    PlyWriteOptions options;
+    options.format = format;
+    options.layout = layout;
+    options.position_origin = origin;
+    ASSERT_TRUE(write_ply(path, options, mesh.vertices, mesh.triangles).ok());
+    EXPECT_NE(test::read_bytes(path).find("property double x"), std::string::npos);
+    PlyReadOptions framed;
+    framed.position_origin = origin;
+    Result<PlyMesh> back = read_ply(path, framed);
+    ASSERT_TRUE(back.ok()) << back.status().message();
+    EXPECT_TRUE(back->info.double_positions);
+    EXPECT_TRUE(test::same_bits(mesh.vertices, back->vertices));
+    EXPECT_EQ(back->triangles, mesh.triangles);
+  }
 }
 
 TEST(PlyWriter, PublishesAtomicallyOnFinish) {
@@ -174,7 +209,7 @@ TEST(PlyWriterDeathTest, WriteFailureIsAnIoError) {
         const rlimit limit{100000, 100000};
         setrlimit(RLIMIT_FSIZE, &limit);
         const Status status =
-            write_ply(path, {PlyFormat::binary_little_endian, mesh.layout, PlyColorType::uchar, {}},
+            write_ply(path, {PlyFormat::binary_little_endian, mesh.layout, PlyColorType::uchar, {}, {}},
                       mesh.vertices, mesh.triangles);
         const bool expected = status.code() == ErrorCode::io &&
                               status.message().find(path.string() + ": write failed") == 0 &&

@@ -83,6 +83,8 @@ class ModelBuilder {
   Status add(const NodeMesh& mesh, const std::string& name, const detail::DracoPositionGrid& grid) {
     tinygltf::Node node;
     node.name = name;
+    if (options_.translation != std::array<double, 3>{0.0, 0.0, 0.0})
+      node.translation.assign(options_.translation.begin(), options_.translation.end());
     if (mesh.triangle_count() > 0) {
       tinygltf::Mesh gltf_mesh;
       gltf_mesh.name = name;

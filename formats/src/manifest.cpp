@@ -3,6 +3,7 @@
 
 #include <cassert>
 #include <cerrno>
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <fstream>
@@ -154,6 +155,7 @@ Status emit_manifest(const Manifest& m, std::size_t node_count, const ManifestNo
   const json head{{"format", "octolod-manifest"},
                   {"version", m.version},
                   {"layout", layout_to_json(m.layout)},
+                  {"origin", m.origin},
                   {"bounds", bounds_to_json(m.bounds)},
                   {"input_vertices", m.input_vertices},
                   {"input_triangles", m.input_triangles},
@@ -241,6 +243,9 @@ Result<Manifest> manifest_from_parser(const Parse& parse, std::string_view name)
     const json& layout = doc.at("layout");
     m.layout = VertexLayout{layout.at("normal").get<bool>(), layout.at("color").get<bool>(),
                             layout.at("uv").get<bool>()};
+    if (doc.contains("origin")) m.origin = doc.at("origin").get<std::array<double, 3>>();
+    for (const double x : m.origin)
+      if (!std::isfinite(x)) return invalid(name, "\"origin\" is not finite");
     m.bounds = bounds_from_json(doc.at("bounds"));
     m.input_vertices = integer_at<std::uint64_t>(doc, "input_vertices");
     m.input_triangles = integer_at<std::uint64_t>(doc, "input_triangles");

@@ -36,6 +36,7 @@ struct PropertyPlan {
   ply::Property property;
   std::uint32_t slot = kNoSlot;  // vertices: float offset of the value within a decoded vertex
   double divisor = 0.0;          // integer colours: divided by their type's maximum; 0 = as is
+  int axis = -1;                 // positions: 0, 1, 2 for x, y, z (less the reader's origin)
   bool is_index_list = false;    // faces: the vertex_indices / vertex_index list
   std::size_t offset = 0;        // binary elements without lists: byte offset in the entry
 };
@@ -96,7 +97,12 @@ Status plan_vertices(const ply::Element& element, const std::string& path, Eleme
   auto assign = [&](int property, std::uint32_t slot) {
     plan.properties[static_cast<std::size_t>(property)].slot = slot;
   };
-  for (std::uint32_t i = 0; i < 3; ++i) assign((*position)[i], VertexLayout::position_offset() + i);
+  for (std::uint32_t i = 0; i < 3; ++i) {
+    assign((*position)[i], VertexLayout::position_offset() + i);
+    const PropertyPlan& p = plan.properties[static_cast<std::size_t>((*position)[i])];
+    plan.properties[static_cast<std::size_t>((*position)[i])].axis = static_cast<int>(i);
+    info.double_positions = info.double_positions || p.property.type == ScalarType::float64;
+  }
   if (normal)
     for (std::uint32_t i = 0; i < 3; ++i) assign((*normal)[i], VertexLayout::normal_offset() + i);
   if (color) {
@@ -188,7 +194,7 @@ Result<Plan> build_plan(const ply::Header& header, const ply::FileBuffer& in) {
     p.count = element.count;
     std::size_t offset = 0;
     for (const ply::Property& property : element.properties) {
-      p.properties.push_back(PropertyPlan{property, kNoSlot, 0.0, false, offset});
+      p.properties.push_back(PropertyPlan{property, kNoSlot, 0.0, -1, false, offset});
       if (property.is_list) p.fixed_size = false;
       offset += ply::size_of(property.type);
     }
@@ -232,10 +238,12 @@ template <class Source>
 class StreamReader final : public PlyReader {
  public:
   StreamReader(std::unique_ptr<ply::FileBuffer> in, Source source, Plan plan,
-               std::size_t batch_bytes)
+               const PlyReadOptions& options)
       : in_(std::move(in)), source_(std::move(source)), plan_(std::move(plan)),
-        batch_bytes_(std::max(batch_bytes, kMinBatchBytes)) {
+        batch_bytes_(std::max(options.buffer_bytes, kMinBatchBytes)) {
     info_ = plan_.info;
+    if (options.position_origin) info_.position_origin = *options.position_origin;
+    else origin_pending_ = options.recentre_double_positions && info_.double_positions;
   }
 
   Result<PlyBatch> next() override {
@@ -336,12 +344,19 @@ class StreamReader final : public PlyReader {
     const std::size_t room = static_cast<std::size_t>(std::min<std::uint64_t>(
         element.count, std::max<std::size_t>(1, batch_bytes_ / (floats * sizeof(float)))));
     if (vertices_.empty()) vertices_.resize(room * floats);
+    // the first vertex sets the origin (the generic path), the fast path takes the rest
+    if (origin_pending_) OCTOLOD_RETURN_IF_ERROR(decode_vertices_generic(element, 1, produced));
     if constexpr (Source::kBinary) {
       if (element.fixed_size && element.stride <= in_->capacity() / 2)
         OCTOLOD_RETURN_IF_ERROR(decode_vertices_fixed(element, room, produced));
     }
-    // The generic path: ascii, lists in the vertex element, or an entry the fast path left
-    // for a precise error message.
+    return decode_vertices_generic(element, room, produced);
+  }
+
+  // The generic path: ascii, lists in the vertex element, or an entry the fast path left for a
+  // precise error message. Up to `room` vertices in all.
+  Status decode_vertices_generic(const ElementPlan& element, std::size_t room, std::size_t& produced) {
+    const std::size_t floats = info_.layout.floats();
     for (; produced < room && index_ < element.count; ++produced, ++index_) {
       float* vertex = vertices_.data() + produced * floats;
       OCTOLOD_RETURN_IF_ERROR(source_.begin_entry(context(element)));
@@ -353,6 +368,11 @@ class StreamReader final : public PlyReader {
         const std::uint64_t where = source_.position();
         double value = 0;
         OCTOLOD_RETURN_IF_ERROR(source_.read_number(p.property.type, value));
+        if (p.axis >= 0) {
+          double& origin = info_.position_origin[static_cast<std::size_t>(p.axis)];
+          if (origin_pending_ && std::isfinite(value)) origin = std::round(value);
+          value -= origin;
+        }
         const float converted = static_cast<float>(p.divisor != 0.0 ? value / p.divisor : value);
         if (!std::isfinite(converted))
           return error_at(where, "vertex " + std::to_string(index_) + " has a non-finite " +
@@ -363,6 +383,7 @@ class StreamReader final : public PlyReader {
         vertex[p.slot] = converted;
       }
       OCTOLOD_RETURN_IF_ERROR(source_.end_entry());
+      origin_pending_ = false;
     }
     return {};
   }
@@ -376,11 +397,14 @@ class StreamReader final : public PlyReader {
       ScalarType type;
       std::uint32_t slot;
       double divisor;
+      double origin;
     };
     std::array<Kept, 16> kept{};  // at most 14 floats per vertex, one property each
     std::size_t kept_count = 0;
     for (const PropertyPlan& p : element.properties)
-      if (p.slot != kNoSlot) kept[kept_count++] = Kept{p.offset, p.property.type, p.slot, p.divisor};
+      if (p.slot != kNoSlot)
+        kept[kept_count++] = Kept{p.offset, p.property.type, p.slot, p.divisor,
+                                  p.axis >= 0 ? info_.position_origin[static_cast<std::size_t>(p.axis)] : 0.0};
     const std::size_t floats = info_.layout.floats();
     const std::size_t stride = element.stride;
     ply::FileBuffer& in = *in_;
@@ -399,10 +423,10 @@ class StreamReader final : public PlyReader {
         for (std::size_t k = 0; k < kept_count; ++k) {
           const Kept& p = kept[k];
           float value;
-          if (p.type == ScalarType::float32) {
+          if (p.type == ScalarType::float32 && p.origin == 0.0) {
             value = std::bit_cast<float>(ply::load<std::uint32_t, kSwap>(entry + p.offset));
           } else {
-            const double wide = ply::load_as_double<kSwap>(entry + p.offset, p.type);
+            const double wide = ply::load_as_double<kSwap>(entry + p.offset, p.type) - p.origin;
             value = static_cast<float>(p.divisor != 0.0 ? wide / p.divisor : wide);
           }
           vertex[p.slot] = value;
@@ -555,6 +579,7 @@ class StreamReader final : public PlyReader {
   std::uint64_t vertices_emitted_ = 0;
   std::uint64_t triangles_emitted_ = 0;
   bool trailing_checked_ = false;
+  bool origin_pending_ = false;  // the first vertex sets info_.position_origin
   Status failure_;
 };
 
@@ -574,34 +599,30 @@ Result<std::unique_ptr<PlyReader>> PlyReader::open(const std::filesystem::path& 
   switch (header->format) {
     case PlyFormat::ascii:
       reader = std::make_unique<StreamReader<ply::AsciiSource>>(
-          std::move(in), ply::AsciiSource(buffer, header->lines + 1), std::move(plan.value()),
-          options.buffer_bytes);
+          std::move(in), ply::AsciiSource(buffer, header->lines + 1), std::move(plan.value()), options);
       break;
     case PlyFormat::binary_little_endian:
     case PlyFormat::binary_big_endian:
       if (ply::native_format_is(header->format)) {
         reader = std::make_unique<StreamReader<ply::BinarySource<false>>>(
-            std::move(in), ply::BinarySource<false>(buffer), std::move(plan.value()),
-            options.buffer_bytes);
+            std::move(in), ply::BinarySource<false>(buffer), std::move(plan.value()), options);
       } else {
         reader = std::make_unique<StreamReader<ply::BinarySource<true>>>(
-            std::move(in), ply::BinarySource<true>(buffer), std::move(plan.value()),
-            options.buffer_bytes);
+            std::move(in), ply::BinarySource<true>(buffer), std::move(plan.value()), options);
       }
       break;
   }
   return reader;
 }
 
-Result<PlyMesh> read_ply(const std::filesystem::path& path) {
-  Result<std::unique_ptr<PlyReader>> opened = PlyReader::open(path);
+Result<PlyMesh> read_ply(const std::filesystem::path& path, const PlyReadOptions& options) {
+  Result<std::unique_ptr<PlyReader>> opened = PlyReader::open(path, options);
   if (!opened.ok()) return opened.status();
   PlyReader& reader = *opened.value();
   PlyMesh mesh;
-  mesh.info = reader.info();
   // The counts were checked against the file size by open(), so reserving them is safe.
-  mesh.vertices.reserve(mesh.info.vertex_count * mesh.info.layout.floats());
-  mesh.triangles.reserve(mesh.info.face_count * 3);
+  mesh.vertices.reserve(reader.info().vertex_count * reader.info().layout.floats());
+  mesh.triangles.reserve(reader.info().face_count * 3);
   for (;;) {
     Result<PlyBatch> batch = reader.next();
     if (!batch.ok()) return batch.status();
@@ -611,6 +632,7 @@ Result<PlyMesh> read_ply(const std::filesystem::path& path) {
     else
       mesh.triangles.insert(mesh.triangles.end(), batch->triangles.begin(), batch->triangles.end());
   }
+  mesh.info = reader.info();  // with the origin the first vertex set
   return mesh;
 }
 

@@ -39,7 +39,8 @@ ply::Header header_for(const PlyWriteOptions& options, std::uint64_t vertex_coun
   auto add = [&](const char* name, ScalarType type) {
     vertex.properties.push_back(ply::Property{name, type, false, ScalarType::uint8});
   };
-  for (const char* name : {"x", "y", "z"}) add(name, ScalarType::float32);
+  for (const char* name : {"x", "y", "z"})
+    add(name, options.position_origin ? ScalarType::float64 : ScalarType::float32);
   if (options.layout.normal)
     for (const char* name : {"nx", "ny", "nz"}) add(name, ScalarType::float32);
   if (options.layout.color) {
@@ -69,7 +70,8 @@ class FileWriter final : public PlyWriter {
   FileWriter(std::filesystem::path path, std::string temp, int fd, const PlyWriteOptions& options,
              std::uint64_t vertex_count, std::uint64_t triangle_count)
       : path_(std::move(path)), temp_(std::move(temp)), fd_(fd), format_(options.format),
-        layout_(options.layout), color_type_(options.color_type), vertex_count_(vertex_count),
+        layout_(options.layout), color_type_(options.color_type), origin_(options.position_origin),
+        vertex_count_(vertex_count),
         triangle_count_(triangle_count),
         swap_(options.format != PlyFormat::ascii && !ply::native_format_is(options.format)) {
   }
@@ -168,8 +170,12 @@ class FileWriter final : public PlyWriter {
 
   template <class T>
   void put_binary(T value) {
-    static_assert(sizeof(T) == 4 || sizeof(T) == 1);
-    if constexpr (sizeof(T) == 4) {
+    static_assert(sizeof(T) == 8 || sizeof(T) == 4 || sizeof(T) == 1);
+    if constexpr (sizeof(T) == 8) {
+      std::uint64_t bits = std::bit_cast<std::uint64_t>(value);
+      if (swap_) bits = ply::byte_swap(bits);
+      put(reinterpret_cast<const char*>(&bits), 8);
+    } else if constexpr (sizeof(T) == 4) {
       std::uint32_t bits = std::bit_cast<std::uint32_t>(value);
       if (swap_) bits = ply::byte_swap(bits);
       put(reinterpret_cast<const char*>(&bits), 4);
@@ -182,7 +188,7 @@ class FileWriter final : public PlyWriter {
   void put_text(T value, char separator) {
     char* out = buffer_.get() + used_;
     const auto [end, ec] = std::to_chars(out, out + 32, value);
-    (void)ec;  // 32 characters hold any float or 32-bit integer
+    (void)ec;  // 32 characters hold any double or 32-bit integer
     *end = separator;
     used_ = static_cast<std::size_t>(end + 1 - buffer_.get());
   }
@@ -194,7 +200,11 @@ class FileWriter final : public PlyWriter {
     for (std::uint32_t i = 0; i < floats; ++i) {
       const bool is_color = layout_.color && i >= color_begin && i < color_begin + 3;
       const char separator = i + 1 == floats ? '\n' : ' ';
-      if (format_ == PlyFormat::ascii) {
+      if (origin_ && i < 3) {
+        const double absolute = static_cast<double>(v[i]) + (*origin_)[i];
+        if (format_ == PlyFormat::ascii) put_text(absolute, separator);
+        else put_binary(absolute);
+      } else if (format_ == PlyFormat::ascii) {
         if (is_color && byte_color)
           put_text(static_cast<unsigned>(color_byte(v[i])), separator);
         else
@@ -241,6 +251,7 @@ class FileWriter final : public PlyWriter {
   PlyFormat format_;
   VertexLayout layout_;
   PlyColorType color_type_;
+  std::optional<std::array<double, 3>> origin_;  // positions written as double, plus it
   std::uint64_t vertex_count_;
   std::uint64_t triangle_count_;
   bool swap_;

@@ -19,8 +19,12 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   if (fd < 0) return 0;
   if (ftruncate(fd, 0) != 0 || pwrite(fd, data, size, 0) != static_cast<ssize_t>(size)) return 0;
 
-  // A small batch size makes fans span batches and exercises every resume path.
-  auto reader = octolod::PlyReader::open(path, octolod::PlyReadOptions{4096});
+  // A small batch size makes fans span batches and exercises every resume path; double
+  // positions are recentred as the bake reads them.
+  octolod::PlyReadOptions options;
+  options.buffer_bytes = 4096;
+  options.recentre_double_positions = true;
+  auto reader = octolod::PlyReader::open(path, options);
   if (!reader.ok()) return 0;
   const octolod::PlyInfo& info = reader.value()->info();
   const std::size_t floats = info.layout.floats();

@@ -6,10 +6,11 @@
 // triangle primitive; attributes POSITION (vec3 float, with min/max), NORMAL (vec3 float),
 // COLOR_0 (vec3 float, linear 0..1), TEXCOORD_0 (vec2 float) as the mesh's VertexLayout has them;
 // indices uint16 when every vertex index fits below 65535, else uint32. Positions are in model
-// units; node transforms are identity. Without Draco the attribute values are copied bit-exactly
+// units; node transforms are identity but for GltfWriteOptions::translation. Without Draco the attribute values are copied bit-exactly
 // (one interleaved buffer view per mesh). A mesh without triangles becomes a node without a mesh.
 #pragma once
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <filesystem>
@@ -52,6 +53,9 @@ struct GltfWriteOptions {
   DracoOptions draco_options;
   // Node and mesh names: empty (names "mesh_0", "mesh_1", ...) or exactly one per mesh.
   std::vector<std::string> names;
+  // Every node's translation (model units): where the meshes' (0, 0, 0) lies, e.g. a baked
+  // tree's Manifest::origin; the positions stay float relative to it. Zeros: no translation.
+  std::array<double, 3> translation{0.0, 0.0, 0.0};
 };
 
 // Encodes `meshes` into the bytes of a GLB file (options.binary) or a .gltf file. Errors:

@@ -65,6 +65,12 @@ struct BakeParameters {
 struct Manifest {
   std::uint32_t version = kManifestVersion;
   VertexLayout layout;
+  // Where the tree's (0, 0, 0) lies in the input's coordinates (model units, double): every
+  // position of the tree (bounds, cells, node files) is relative to it. Zeros unless the input's
+  // positions were recentred before rounding to float (double positions: PlyReadOptions); a
+  // runtime places the tree at this point, exporters add it back. Absent in manifests of bakes
+  // before 2026-12-02: zeros.
+  std::array<double, 3> origin{0.0, 0.0, 0.0};
   Bounds bounds;                        // tight bounds of the model
   std::uint64_t input_vertices = 0;
   std::uint64_t input_triangles = 0;    // after fan triangulation, degenerate ones included

@@ -31,9 +31,11 @@
 // - Elements without properties take no bytes (and no ascii lines).
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <filesystem>
 #include <memory>
+#include <optional>
 #include <span>
 #include <string>
 #include <vector>
@@ -53,12 +55,25 @@ struct PlyInfo {
                                    // all normal components, both uv components are required)
   PlyColorType color_type = PlyColorType::uchar;  // on-disk colour type when layout.color
   std::uint64_t header_bytes = 0;  // bytes up to and including the end_header line
+  bool double_positions = false;   // x, y or z is declared double (float64)
+  // Subtracted from every position before it is rounded to float (PlyReadOptions): the decoded
+  // positions are relative to it. Zeros unless an origin applies; with recentre_double_positions
+  // it is known once the first vertex batch has been returned.
+  std::array<double, 3> position_origin{0.0, 0.0, 0.0};
 };
 
 struct PlyReadOptions {
   // Upper bound on decoded data held per batch. Larger batches mean fewer calls; memory is
   // this plus a fixed 64 KiB file buffer. Minimum 4 KiB.
   std::size_t buffer_bytes = std::size_t{1} << 20;
+  // Positions declared double are decoded relative to the first vertex's position rounded to
+  // whole units (info().position_origin): floats keep 24 bits of a coordinate, so 4,000 km from
+  // the origin (geo-referenced data) they are 0.25 apart, while relative to a point of the model
+  // they keep its detail. Float positions are decoded as they are (they hold no more).
+  bool recentre_double_positions = false;
+  // When set, subtracted from every position instead (double or float): to read a second mesh in
+  // the frame of a first (info().position_origin of its reader) or of a baked tree.
+  std::optional<std::array<double, 3>> position_origin;
 };
 
 struct PlyBatch {
@@ -95,6 +110,7 @@ struct PlyMesh {
   std::vector<float> vertices;          // info.vertex_count * info.layout.floats()
   std::vector<std::uint32_t> triangles;  // 3 per triangle
 };
-Result<PlyMesh> read_ply(const std::filesystem::path& path);
+// (buffer_bytes of `options` is ignored: the whole mesh is held anyway.)
+Result<PlyMesh> read_ply(const std::filesystem::path& path, const PlyReadOptions& options = {});
 
 }  // namespace octolod

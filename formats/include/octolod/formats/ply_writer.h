@@ -3,9 +3,11 @@
 // sibling, then renamed); destroying an unfinished writer removes the temporary.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <filesystem>
 #include <memory>
+#include <optional>
 #include <span>
 #include <string>
 #include <vector>
@@ -21,6 +23,10 @@ struct PlyWriteOptions {
   VertexLayout layout;
   PlyColorType color_type = PlyColorType::uchar;
   std::vector<std::string> comments;  // one "comment" line each; must not contain newlines
+  // When set, x, y, z are written as double, each the given float plus this origin (in
+  // double): a mesh held relative to a point of the input (PlyInfo::position_origin) written
+  // back in the input's own coordinates, without rounding them to float.
+  std::optional<std::array<double, 3>> position_origin;
 };
 
 class PlyWriter {
