@@ -6,11 +6,13 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <map>
 #include <sstream>
 #include <string>
@@ -316,6 +318,66 @@ TEST(BakeCli, WarnsWhenFloatsAreCoarseFarFromTheOrigin) {
       << warned.err;
   EXPECT_NE(warned.err.find("0.25 apart"), std::string::npos) << warned.err;
   EXPECT_NE(warned.err.find("recentre"), std::string::npos) << warned.err;
+}
+
+TEST(BakeCli, DoublePositionsFarFromTheOriginBakeAsNearOnes) {
+  // A bumpy 16 x 16 grid near the origin (floats), and the same written as double positions
+  // 4,000 km out, where floats are 0.25 apart and the unit square would collapse to a few points.
+  // Baked relative to its first vertex (exactly the offset here), the far one gives the near
+  // one's node files; extract and export put it back where it was, eval measures it there.
+  SKIP_WITHOUT_CLI();
+  TempDir dir;
+  NodeMesh near = plane(16, 0.0f);
+  for (std::size_t v = 0; v < near.vertex_count(); ++v) {
+    float* p = &near.vertices[v * 11];
+    p[2] = 0.05f * std::sin(9.0f * p[0] + 0.5f) * std::cos(7.0f * p[1] + 0.25f);  // never -0, which + 4e6 - 4e6 makes +0
+  }
+  write_mesh(dir / "near.ply", near);
+  const std::array<double, 3> offset{4.0e6, -5.0e5, 0.0};
+  PlyWriteOptions far_options;
+  far_options.layout = near.layout;
+  far_options.color_type = PlyColorType::float32;
+  far_options.position_origin = offset;
+  ASSERT_TRUE(write_ply(dir / "far.ply", far_options, near.vertices, near.indices).ok());
+  const std::string lods = " --max-tris 100";
+  const CliRun near_bake = run_cli(dir, "bake " + (dir / "near.ply").string() + " -o " + (dir / "near").string() + lods);
+  ASSERT_EQ(near_bake.code, 0) << near_bake.err;
+  const CliRun far_bake = run_cli(dir, "bake " + (dir / "far.ply").string() + " -o " + (dir / "far").string() + lods);
+  ASSERT_EQ(far_bake.code, 0) << far_bake.err;
+  EXPECT_EQ(far_bake.err.find("warning"), std::string::npos) << far_bake.err;
+  Result<Manifest> near_tree = read_tree_manifest(dir / "near"), far_tree = read_tree_manifest(dir / "far");
+  ASSERT_TRUE(near_tree.ok() && far_tree.ok());
+  EXPECT_EQ(near_tree->origin, (std::array<double, 3>{0.0, 0.0, 0.0}));
+  EXPECT_EQ(far_tree->origin, offset);
+  ASSERT_EQ(far_tree->nodes.size(), near_tree->nodes.size());
+  ASSERT_GT(far_tree->nodes.size(), 1u);
+  for (std::size_t n = 0; n < near_tree->nodes.size(); ++n) {
+    ASSERT_EQ(far_tree->nodes[n].lods.size(), near_tree->nodes[n].lods.size());
+    for (const LodInfo& lod : near_tree->nodes[n].lods) {
+      std::ifstream a(dir / "near" / lod.file, std::ios::binary), b(dir / "far" / lod.file, std::ios::binary);
+      EXPECT_EQ(std::string(std::istreambuf_iterator<char>(a), {}), std::string(std::istreambuf_iterator<char>(b), {}))
+          << lod.file;
+    }
+  }
+  // the cut in the input's coordinates: double positions, the offset added back
+  const CliRun extracted = run_cli(dir, "extract " + (dir / "far").string() + " --level 0 -o " + (dir / "cut.ply").string());
+  ASSERT_EQ(extracted.code, 0) << extracted.err;
+  PlyReadOptions framed;
+  framed.position_origin = offset;
+  Result<PlyMesh> cut = read_ply(dir / "cut.ply", framed);
+  ASSERT_TRUE(cut.ok()) << cut.status().message();
+  EXPECT_TRUE(cut->info.double_positions);
+  const CliRun eval = run_cli(dir, "--json eval " + (dir / "far.ply").string() + " " + (dir / "cut.ply").string());
+  ASSERT_EQ(eval.code, 0) << eval.err;
+  const json distances = json::parse(eval.out);
+  EXPECT_LE(distances["two_sided"]["max"].get<double>(), far_tree->nodes[0].lods[0].error + 1e-6);
+  EXPECT_GT(distances["two_sided"]["max_at"][0].get<double>(), offset[0] - 1.0);  // where, out there
+  const CliRun exported = run_cli(dir, "export " + (dir / "far").string() + " --level 0 -o " + (dir / "cut.gltf").string());
+  ASSERT_EQ(exported.code, 0) << exported.err;
+  std::ifstream gltf(dir / "cut.gltf");
+  const json document = json::parse(gltf);
+  const auto translation = document["nodes"][0]["translation"].get<std::array<double, 3>>();
+  EXPECT_EQ(translation, offset);
 }
 
 // `info`'s stats line: counts and bytes with every digit, seconds to six significant digits.

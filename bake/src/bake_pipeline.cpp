@@ -547,6 +547,7 @@ Result<Manifest> manifest_header(const BakeOptions& options, unsigned threads,
                                  const SoupResult& soup, const OctreeResult& octree) {
   Manifest m;
   m.layout = soup.layout;
+  m.origin = soup.origin;
   m.input_vertices = soup.vertex_count;
   m.input_triangles = soup.triangle_count;
   m.parameters.input = options.input.string();

@@ -187,6 +187,7 @@ class SoupBuilder {
   Status open_reader(const std::filesystem::path& ply) {
     PlyReadOptions read_options;
     read_options.buffer_bytes = io_;
+    read_options.recentre_double_positions = options_.recentre_double_positions;
     auto reader = PlyReader::open(ply, read_options);
     if (!reader.ok()) return reader.status();
     reader_ = std::move(reader).value();
@@ -204,6 +205,7 @@ class SoupBuilder {
     result_.vertex_count = split->vertex_count;
     result_.triangle_count = split->triangle_count;
     result_.bounds = split->bounds;
+    result_.origin = split->origin;
     split_wall_ = seconds_since(start);
     split_sort_seconds_ = sorter ? sorter->stats().seconds : 0.0;
     return {};

@@ -63,6 +63,7 @@ Result<SplitResult> split_ply(PlyReader& reader, std::size_t batch_bytes, const 
     }
     if (sinks.progress) sinks.progress(done);
   }
+  result.origin = reader.info().position_origin;
   return result;
 }
 

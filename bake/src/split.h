@@ -4,6 +4,7 @@
 // batch of triangle records, whatever the file's size. Also computes the bounds of the vertices.
 #pragma once
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <filesystem>
@@ -36,6 +37,7 @@ struct SplitResult {
   std::uint64_t vertex_count = 0;
   std::uint64_t triangle_count = 0;
   Bounds bounds;  // of all vertices, model units
+  std::array<double, 3> origin{0.0, 0.0, 0.0};  // the reader's position_origin (PlyInfo)
 };
 
 // Reads `reader` to its end. `batch_bytes` bounds the triangle record batch (at least one

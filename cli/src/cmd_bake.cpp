@@ -49,9 +49,9 @@ nlohmann::json report_json(const bake::BakeReport& r, const std::string& output)
 }
 
 // Positions are floats: far from the origin they are far apart. A warning when, at the model's
-// largest coordinate, they are coarser than 16-bit quantization of its diagonal (2^16 steps
-// across it, as a game's compressed meshes keep): the input is better recentred. Nothing for an
-// empty model.
+// largest coordinate (in the tree's frame: double input positions are recentred first), they are
+// coarser than 16-bit quantization of its diagonal (2^16 steps across it, as a game's compressed
+// meshes keep): the input is better recentred. Nothing for an empty model.
 std::optional<std::string> float_precision_warning(const Bounds& bounds) {
   if (bounds.empty()) return std::nullopt;
   const double largest = bounds.largest_magnitude(), diagonal = bounds.diagonal();
@@ -61,8 +61,8 @@ std::optional<std::string> float_precision_warning(const Bounds& bounds) {
   char text[320];
   std::snprintf(text, sizeof text,
                 "coordinates reach %.3g and the model is %.3g across: stored as floats, positions there are %.3g "
-                "apart (1/%.0f of its size); recentre the input (subtract its centre) for more precision and "
-                "tighter errors",
+                "apart (1/%.0f of its size); store the positions as double (the bake then recentres them) or "
+                "recentre the input for more precision and tighter errors",
                 largest, diagonal, spacing, diagonal / spacing);
   return std::string(text);
 }

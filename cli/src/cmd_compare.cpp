@@ -179,7 +179,7 @@ int run_compare(const CompareArgs& args, const CommandContext& context) {
   if (!manifest.ok()) return report(manifest.status());
   if (manifest->nodes.empty() || manifest->input_triangles == 0)
     return report(bad_input_error(args.tree + ": the tree holds no triangles"));
-  Result<MeshFile> input = read_mesh_file(args.input);
+  Result<MeshFile> input = read_mesh_file(args.input, manifest->origin);  // in the tree's frame
   if (!input.ok()) return report(input.status());
   if (input->mesh.triangle_count() != manifest->input_triangles)
     return report(bad_input_error(
@@ -223,6 +223,7 @@ int run_compare(const CompareArgs& args, const CommandContext& context) {
                                                    ", b = the cut at error " +
                                                    std::to_string(row.error_target) + ")"));
     row.cut_metro = m.value();
+    place_maxima(row.cut_metro, manifest->origin);
     counts.push_back(static_cast<std::uint32_t>(
         std::clamp<std::uint64_t>(row.summary.triangles, 1, 0xFFFFFFFFu)));
   }
@@ -245,6 +246,7 @@ int run_compare(const CompareArgs& args, const CommandContext& context) {
                                                      ", b = its reference at " +
                                                      std::to_string(counts[i]) + " triangles)"));
       rows[i].reference_metro = m.value();
+      place_maxima(rows[i].reference_metro, manifest->origin);
     }
   }
 

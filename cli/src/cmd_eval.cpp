@@ -23,7 +23,7 @@ void print_deviation(const char* name, const measure::Deviation& d) {
               static_cast<unsigned long long>(d.samples), d.mean, 100.0 * d.mean_relative, d.rms,
               100.0 * d.rms_relative, d.max, 100.0 * d.max_relative);
   if (d.samples > 0)
-    std::printf("%-9s max at (%.6g %.6g %.6g), closest (%.6g %.6g %.6g)\n", "", d.max_at[0], d.max_at[1],
+    std::printf("%-9s max at (%.9g %.9g %.9g), closest (%.9g %.9g %.9g)\n", "", d.max_at[0], d.max_at[1],
                 d.max_at[2], d.max_closest[0], d.max_closest[1], d.max_closest[2]);
   if (d.compared.normal)
     std::printf("%-9s normal angle mean %.3f deg, max %.3f deg\n", "", d.normal_mean_degrees,
@@ -38,7 +38,7 @@ int run_eval(const EvalArgs& args, const CommandContext& context) {
   Progress progress(context);
   Result<MeshFile> a = read_mesh_file(args.a);
   if (!a.ok()) return report(a.status());
-  Result<MeshFile> b = read_mesh_file(args.b);
+  Result<MeshFile> b = read_mesh_file(args.b, a->origin);  // both in a's frame
   if (!b.ok()) return report(b.status());
   progress.message("eval: read " + std::to_string(a->mesh.triangle_count()) + " + " +
                    std::to_string(b->mesh.triangle_count()) + " triangles");
@@ -52,6 +52,7 @@ int run_eval(const EvalArgs& args, const CommandContext& context) {
     return report(Status(r.status().code(),
                          r.status().message() + " (a = " + args.a + ", b = " + args.b + ")"));
   progress.finish("eval", r->seconds);
+  place_maxima(r.value(), a->origin);
 
   if (context.json) {
     nlohmann::json j = metro_json(r.value());

@@ -38,6 +38,7 @@ int run_export(const ExportArgs& args, const CommandContext& context) {
   options.binary = std::filesystem::path(args.output).extension() != ".gltf";
   options.draco = args.draco;
   options.draco_options = args.draco_options;
+  options.translation = manifest->origin;
   std::uint64_t triangles = 0, vertices = 0;
   for (std::size_t i = 0; i < cut.size(); ++i) {
     options.names.push_back(mesh_name(manifest->nodes[cut[i].node], cut[i].lod));

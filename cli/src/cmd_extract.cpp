@@ -34,7 +34,8 @@ int run_extract(const ExtractArgs& args, const CommandContext& context) {
   progress.message("extract: " + std::to_string(cut.size()) + " node LODs");
   Result<NodeMesh> mesh = load_cut_mesh(root, manifest.value(), cut);
   if (!mesh.ok()) return report(mesh.status());
-  const Status written = write_mesh_file(args.output, mesh.value(), args.ascii);
+  const Status written =
+      write_mesh_file(args.output, mesh.value(), args.ascii, PlyColorType::uchar, manifest->origin);
   if (!written.ok()) return report(written);
 
   const Result<std::uint64_t> written_bytes = written_file_size(args.output);

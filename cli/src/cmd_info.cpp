@@ -149,6 +149,7 @@ int run_info(const std::string& tree, const CommandContext& context) {
                 {"version", m.version},
                 {"layout", m.layout.describe()},
                 {"floats_per_vertex", m.layout.floats()},
+                {"origin", m.origin},
                 {"bounds", {{"min", m.bounds.min}, {"max", m.bounds.max}}},
                 {"input_vertices", m.input_vertices},
                 {"input_triangles", m.input_triangles},
@@ -176,6 +177,9 @@ int run_info(const std::string& tree, const CommandContext& context) {
               static_cast<unsigned long long>(m.input_triangles));
   std::printf("layout      %s (%u floats per vertex)\n", m.layout.describe().c_str(),
               m.layout.floats());
+  if (m.origin != std::array<double, 3>{0.0, 0.0, 0.0})
+    std::printf("origin      [%.17g %.17g %.17g] (positions below and in the node files are relative to it)\n",
+                m.origin[0], m.origin[1], m.origin[2]);
   std::printf("bounds      [%g %g %g] .. [%g %g %g]\n", m.bounds.min[0], m.bounds.min[1],
               m.bounds.min[2], m.bounds.max[0], m.bounds.max[1], m.bounds.max[2]);
   std::printf("nodes       %llu (%llu leaves), depth %u, %llu LODs\n",

@@ -28,7 +28,7 @@ int run_reference(const ReferenceArgs& args, const CommandContext& context) {
                          args.input + ": " + simplified.status().message()));
   progress.finish("reference", stats.seconds);
   const Status written =
-      write_mesh_file(args.output, simplified.value(), args.ascii, input->color_type);
+      write_mesh_file(args.output, simplified.value(), args.ascii, input->color_type, input->origin);
   if (!written.ok()) return report(written);
 
   const Result<std::uint64_t> written_bytes = written_file_size(args.output);

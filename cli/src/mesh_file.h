@@ -2,7 +2,9 @@
 // extract), which need the mesh in memory: about 50 bytes per triangle with all attributes.
 #pragma once
 
+#include <array>
 #include <filesystem>
+#include <optional>
 
 #include "octolod/formats/node_file.h"
 #include "octolod/formats/ply.h"
@@ -13,16 +15,25 @@ namespace octolod::cli {
 struct MeshFile {
   NodeMesh mesh;                                  // layout as the file's vertex properties
   PlyColorType color_type = PlyColorType::uchar;  // how the file stores colours
+  // The point of the file's coordinates that mesh's positions are relative to (double).
+  std::array<double, 3> origin{0.0, 0.0, 0.0};
 };
 
-// Reads a PLY file (any format the streaming reader accepts; polygons fan-triangulated).
-// Errors name the file: io when it cannot be opened or read, bad_input when it is malformed or
-// holds no triangle (nothing to measure).
-Result<MeshFile> read_mesh_file(const std::filesystem::path& path);
+// Reads a PLY file (any format the streaming reader accepts; polygons fan-triangulated), with
+// positions relative to `frame` (another mesh's or a tree's origin), or when it is not given and
+// the file's positions are double, to its first vertex rounded to whole units (as the bake
+// reads them: geo-referenced coordinates keep their detail). Errors name the file: io when it
+// cannot be opened or read, bad_input when it is malformed or holds no triangle (nothing to
+// measure).
+Result<MeshFile> read_mesh_file(const std::filesystem::path& path,
+                                const std::optional<std::array<double, 3>>& frame = std::nullopt);
 
 // Writes `mesh` atomically (PlyWriter: temporary sibling, then rename; nothing is left behind on
-// failure): binary little-endian, or ascii when `ascii`; colours stored as `color_type`.
+// failure): binary little-endian, or ascii when `ascii`; colours stored as `color_type`. With a
+// non-zero `origin` (the mesh's positions are relative to it) positions are written as double
+// with it added back: the file is in the input's coordinates.
 Status write_mesh_file(const std::filesystem::path& path, const NodeMesh& mesh, bool ascii,
-                       PlyColorType color_type = PlyColorType::uchar);
+                       PlyColorType color_type = PlyColorType::uchar,
+                       const std::array<double, 3>& origin = {0.0, 0.0, 0.0});
 
 }  // namespace octolod::cli

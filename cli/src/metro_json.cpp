@@ -32,4 +32,12 @@ nlohmann::json metro_json(const measure::MetroReport& r) {
           {"seconds", r.seconds}};
 }
 
+void place_maxima(measure::MetroReport& report, const std::array<double, 3>& origin) {
+  for (measure::Deviation* d : {&report.a_to_b, &report.b_to_a, &report.two_sided})
+    for (std::size_t k = 0; k < 3; ++k) {
+      d->max_at[k] += origin[k];
+      d->max_closest[k] += origin[k];
+    }
+}
+
 }  // namespace octolod::cli

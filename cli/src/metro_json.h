@@ -3,6 +3,8 @@
 // degrees; attribute fields appear only for the attributes both meshes have.
 #pragma once
 
+#include <array>
+
 #include <nlohmann/json.hpp>
 
 #include "octolod/measure/metro.h"
@@ -11,5 +13,9 @@ namespace octolod::cli {
 
 nlohmann::json deviation_json(const measure::Deviation& deviation);
 nlohmann::json metro_json(const measure::MetroReport& report);
+
+// The report's points (where each max is, and its closest point) moved from the frame of meshes
+// relative to `origin` into the files' coordinates (cli/src/mesh_file.h).
+void place_maxima(measure::MetroReport& report, const std::array<double, 3>& origin);
 
 }  // namespace octolod::cli

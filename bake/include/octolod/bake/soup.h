@@ -30,6 +30,7 @@
 // coincident positions) are kept: the clustering stage drops them.
 #pragma once
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <cstring>
@@ -152,6 +153,10 @@ struct SoupOptions {
   SoupOrder order = SoupOrder::any;
   // Take the out-of-core three-pass path even when the vertices would fit (tests, benchmarks).
   bool force_out_of_core = false;
+  // Positions declared double become relative to the first vertex rounded to whole units
+  // before they are rounded to float (PlyReadOptions::recentre_double_positions): the records,
+  // bounds and everything after are in that frame, SoupResult::origin says where it lies.
+  bool recentre_double_positions = true;
   SoupProgressFn progress;
   // When set, the soup records are handed to `sink` in order, in batches of whole records
   // (valid during the call only), instead of being written to a file: a later stage can start
@@ -187,6 +192,8 @@ struct SoupResult {
   std::uint64_t vertex_count = 0;
   std::uint64_t triangle_count = 0;
   Bounds bounds;         // of every vertex in the file (unreferenced ones included), model units
+  // The input's point that the positions are relative to (SoupOptions::recentre_double_positions).
+  std::array<double, 3> origin{0.0, 0.0, 0.0};
   bool in_core = false;  // which path was taken
   bool mesh_consumed = false;  // SoupOptions::mesh_sink received the mesh (in core only)
   // Out of core: triangles the window pass left to the three sorted passes.

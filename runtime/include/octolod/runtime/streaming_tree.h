@@ -16,6 +16,10 @@
 //     const FrameResult& frame = tree.value()->update(camera);   // never blocks on I/O
 //     for (const DrawItem& d : frame.draws) draw(*d.mesh);       // upload / cache by d.mesh.get()
 //
+// Coordinates: cameras and the drawn meshes are in the tree's frame, model units relative to
+// manifest().origin (zeros unless the bake recentred double input positions); a game places the
+// tree at that point of its world (in double, or relative to its own floating origin).
+//
 // Thread safety: a StreamingTree is used from one thread (the render thread); update() and the
 // accessors must not run concurrently. Loads run on the injected Executor and read through the
 // injected NodeSource; both may be shared by several trees.
