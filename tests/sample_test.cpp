@@ -523,6 +523,31 @@ TEST_F(SampleFiles, WrittenPlyReadsBackWithTheSameData) {
     }
 }
 
+TEST_F(SampleFiles, AnOffsetWritesDoublePositionsOfTheSameModel) {
+  // The rock 4,000 km out: positions are double, each the generated float plus the offset;
+  // read back relative to the offset they are the generated floats (within the doubles'
+  // 2^-30 there), every other value bit for bit.
+  SampleSpec spec = spec_of(Shape::rock, 3000, kAll, 9);
+  spec.offset = {4.0e6, -5.0e5, 1234.0};
+  const std::filesystem::path path = dir_ / "far.ply";
+  ASSERT_TRUE(write_sample_ply(spec, path, PlyFormat::binary_little_endian).ok());
+  PlyReadOptions framed;
+  framed.position_origin = spec.offset;
+  Result<PlyMesh> read = read_ply(path, framed);
+  ASSERT_TRUE(read.ok()) << read.status().message();
+  EXPECT_TRUE(read->info.double_positions);
+  const Mesh expected = generate(spec);
+  ASSERT_EQ(read->vertices.size(), expected.vertices.size());
+  EXPECT_EQ(read->triangles, expected.triangles);
+  const std::uint32_t floats = expected.layout.floats(), color = expected.layout.color_offset();
+  for (std::size_t i = 0; i < expected.vertices.size(); ++i) {
+    const std::uint32_t k = static_cast<std::uint32_t>(i % floats);
+    if (k < 3) ASSERT_NEAR(read->vertices[i], expected.vertices[i], 1e-9) << "float " << i;
+    else if (k >= color && k < color + 3) ASSERT_NEAR(read->vertices[i], expected.vertices[i], 0.5 / 255 + 1e-6);
+    else ASSERT_EQ(read->vertices[i], expected.vertices[i]) << "float " << i;
+  }
+}
+
 TEST_F(SampleFiles, CommittedSmallRockIsTheGeneratorsOutput) {
   // samples/rock_small.ply must be regenerated whenever the generator changes; its header
   // comment is the command that reproduces it.

@@ -2,6 +2,7 @@
 // triangles as PLY, streaming, so any N runs in a few MB (see octolod/samplegen).
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <string>
@@ -28,6 +29,10 @@ int run_sample(const SampleArgs& args, const CommandContext& context) {
   if (!layout.ok()) return report(layout.status());
   spec.layout = layout.value();
   spec.seed = args.seed;
+  for (std::size_t k = 0; k < args.offset.size() && k < 3; ++k) {
+    if (!std::isfinite(args.offset[k])) return report(usage_error("--offset: every coordinate must be finite"));
+    spec.offset[k] = args.offset[k];
+  }
   Result<SampleCounts> counts = sample_counts(spec);
   if (!counts.ok()) return report(counts.status());
 

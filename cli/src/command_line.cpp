@@ -193,7 +193,8 @@ void add_render_command(CLI::App& app, CommandContext& context) {
   command->add_option("tree", args->tree, "Baked tree directory (holds manifest.json)")->required();
   command->add_option("-o,--output", args->output, "PNG file to write (atomically)")->required();
   command->add_option("--camera", args->camera,
-                      "eye_x,eye_y,eye_z,target_x,target_y,target_z in model units (default: frame the whole model)");
+                      "eye_x,eye_y,eye_z,target_x,target_y,target_z in the tree's frame (model units relative to its "
+                      "manifest's origin; default: frame the whole model)");
   command->add_option("--fov", args->fov_degrees, "Vertical field of view in degrees")->capture_default_str();
   command->add_option("--width", args->width, "Picture width in pixels")->capture_default_str();
   command->add_option("--height", args->height, "Picture height in pixels (the SSE viewport)")->capture_default_str();
@@ -218,6 +219,11 @@ void add_sample_command(CLI::App& app, CommandContext& context) {
       ->capture_default_str();
   command->add_option("--seed", args->seed, "Noise seed; same seed, same bytes")
       ->capture_default_str();
+  command
+      ->add_option("--offset", args->offset,
+                   "x,y,z added to every position, written as double (a geo-referenced model: 4e6,5e5,0)")
+      ->delimiter(',')
+      ->expected(3);
   command->add_flag("--ascii", args->ascii, "Write ascii PLY (default: binary little-endian)");
   command->add_option("-o,--output", args->output, "Output .ply file")->required();
   command->callback([args, &context] { context.exit_code = run_sample(*args, context); });

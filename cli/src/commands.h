@@ -86,6 +86,7 @@ struct SampleArgs {
   std::string triangles;
   std::string attributes = "normal,color,uv";
   std::uint64_t seed = 1;
+  std::vector<double> offset;  // empty or x, y, z
   bool ascii = false;
   std::string output;
 };

@@ -9,6 +9,7 @@
 #include <condition_variable>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <memory>
 #include <mutex>
 #include <string>
@@ -239,9 +240,16 @@ Status write_sample_ply(const SampleSpec& spec, const std::filesystem::path& pat
   // The command that reproduces the file byte for byte.
   const std::string layout = spec.layout.describe();
   const std::string attributes = layout == "position" ? "none" : layout.substr(9);  // "position,"
-  options.comments.push_back("octolod sample --shape " + std::string(to_string(spec.shape)) +
-                             " --triangles " + std::to_string(spec.triangles) + " --attributes " +
-                             attributes + " --seed " + std::to_string(spec.seed));
+  std::string command = "octolod sample --shape " + std::string(to_string(spec.shape)) + " --triangles " +
+                        std::to_string(spec.triangles) + " --attributes " + attributes + " --seed " +
+                        std::to_string(spec.seed);
+  if (spec.offset != std::array<double, 3>{0.0, 0.0, 0.0}) {
+    options.position_origin = spec.offset;
+    char text[96];
+    std::snprintf(text, sizeof text, " --offset %.17g,%.17g,%.17g", spec.offset[0], spec.offset[1], spec.offset[2]);
+    command += text;
+  }
+  options.comments.push_back(std::move(command));
   Result<std::unique_ptr<PlyWriter>> writer =
       PlyWriter::create(path, options, counts.vertices, counts.triangles);
   if (!writer.ok()) return writer.status();

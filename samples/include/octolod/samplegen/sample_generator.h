@@ -13,6 +13,7 @@
 #pragma once
 
 #include <cstddef>
+#include <array>
 #include <cstdint>
 #include <filesystem>
 #include <functional>
@@ -54,6 +55,10 @@ struct SampleSpec {
   std::uint64_t triangles = 40'000;
   VertexLayout layout{true, true, true};
   std::uint64_t seed = 1;
+  // Added (in double) to every position write_sample_ply writes; non-zero writes x, y, z as
+  // double: the same model placed far from the origin, as geo-referenced data is (the stream's
+  // positions stay as generated).
+  std::array<double, 3> offset{0.0, 0.0, 0.0};
 };
 
 inline constexpr std::uint64_t kMinTriangles = 16;
