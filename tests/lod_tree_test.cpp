@@ -122,12 +122,6 @@ class LodTreeTest : public ::testing::Test {
 fs::path LodTreeTest::root_;
 
 // The length of the model's bounding box diagonal, model units.
-double model_diagonal(const Manifest& m) {
-  double sum = 0;
-  for (std::size_t i = 0; i < 3; ++i) sum += std::pow(m.bounds.max[i] - m.bounds.min[i], 2.0);
-  return std::sqrt(sum);
-}
-
 // --- the chains ---
 
 TEST_F(LodTreeTest, EveryNodeHasAChainWhoseErrorsGrowAsItsTrianglesShrink) {
@@ -482,7 +476,7 @@ ErrorCheck expect_stored_errors_bound(const LoadedTree& t) {
       parent.insert(parent.end(), samples[i].begin(), samples[i].end());
     }
   }
-  const double diagonal = model_diagonal(m);
+  const double diagonal = m.bounds.diagonal();
   for (std::size_t i = 0; i < m.nodes.size(); ++i) {
     for (std::size_t k = 0; k < m.nodes[i].lods.size(); ++k) {
       const NodeMesh& lod = t.lods[i][k];
@@ -529,7 +523,7 @@ TEST_F(LodTreeTest, StoredErrorsBoundTheDistanceFromTheOriginalTriangles) {
   const auto leaves = static_cast<std::size_t>(
       std::count_if(m.nodes.begin(), m.nodes.end(), [](const NodeInfo& n) { return n.is_leaf(); }));
   EXPECT_GT(check.simplified, (check.checked - leaves) / 2);
-  const double diagonal = model_diagonal(m);
+  const double diagonal = m.bounds.diagonal();
   EXPECT_GT(check.tightest, 0.2);
   EXPECT_LT(m.nodes[0].lods.back().error, 0.5 * diagonal);
   std::printf("[ info ] %zu node LODs checked, max measured/stored error %.3f, root coarsest "
@@ -683,7 +677,7 @@ TEST_F(LodTreeTest, LeavesOverTheCapAreStreamedWithinItAndStayCrackFreeAndBounde
     ASSERT_EQ(m.nodes.size(), r.manifest.nodes.size());
     const std::uint64_t cap = max_depth_leaf_triangles(o.memory_budget_bytes, m.layout, o.max_tris);
     ASSERT_LT(cap, max_depth_leaf_triangles(in_memory.memory_budget_bytes, m.layout, o.max_tris));
-    const double diagonal = model_diagonal(m);
+    const double diagonal = m.bounds.diagonal();
     std::size_t streamed = 0;
     for (std::size_t i = 0; i < m.nodes.size(); ++i) {
       const NodeInfo& n = m.nodes[i];
