@@ -98,9 +98,9 @@ Status plan_vertices(const ply::Element& element, const std::string& path, Eleme
     plan.properties[static_cast<std::size_t>(property)].slot = slot;
   };
   for (std::uint32_t i = 0; i < 3; ++i) {
-    assign((*position)[i], VertexLayout::position_offset() + i);
-    const PropertyPlan& p = plan.properties[static_cast<std::size_t>((*position)[i])];
-    plan.properties[static_cast<std::size_t>((*position)[i])].axis = static_cast<int>(i);
+    PropertyPlan& p = plan.properties[static_cast<std::size_t>((*position)[i])];
+    p.slot = VertexLayout::position_offset() + i;
+    p.axis = static_cast<int>(i);
     info.double_positions = info.double_positions || p.property.type == ScalarType::float64;
   }
   if (normal)
