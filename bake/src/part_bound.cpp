@@ -144,7 +144,7 @@ class DirectedEdges {
 };
 
 using Across = std::array<std::uint32_t, 3>;
-constexpr std::uint32_t kNoTriangle = 0xFFFFFFFFu;
+constexpr std::uint32_t kNoTriangle = PartBounder::kNone;
 
 // Per triangle and edge k (corner k to k + 1): the first other triangle that runs it backwards.
 std::vector<Across> triangles_across(std::size_t triangle_count, const DirectedEdges& edges) {

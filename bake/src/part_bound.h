@@ -22,6 +22,9 @@ std::uint32_t closest_triangle(const measure::TriangleBvh& bvh, const Vec3d& p);
 
 class PartBounder {
  public:
+  // No output triangle (an index that names none).
+  static constexpr std::uint32_t kNone = 0xFFFFFFFFu;
+
   // `output`: the output mesh's triangles (double corners), indexed as the candidates below;
   // borrowed, must outlive the bounder. Keeps 68 bytes per triangle (normal, bounding sphere,
   // the triangles across its edges), and a copy of the output re-wound where its winding is
@@ -118,7 +121,6 @@ class PartBounder {
   // per output triangle and edge k (corner k to k + 1): the first other triangle that runs the
   // edge backwards (corner positions equal), or kNone (the prism's cover proof looks for it among
   // the pieces)
-  static constexpr std::uint32_t kNone = 0xFFFFFFFFu;
   std::vector<std::array<std::uint32_t, 3>> across_;
 };
 
