@@ -23,6 +23,7 @@
 #include "octolod/bake/bake.h"
 #include "octolod/formats/manifest.h"
 #include "octolod/formats/node_file.h"
+#include "octolod/formats/ply_writer.h"
 #include "octolod/measure/triangle_bvh.h"
 #include "octolod/samplegen/sample_generator.h"
 #include "lod_tree.h"
@@ -738,6 +739,59 @@ TEST_F(LodTreeTest, StreamedLeavesAreTheSameForAnyThreadCountAndOctreePath) {
       EXPECT_EQ(a.manifest.nodes[i].lods[k].error, b.manifest.nodes[i].lods[k].error);
     }
   }
+}
+
+// A face the input holds twice would cancel under the clustering's mod-2 rule, and its edges,
+// used twice, would hide from the streamed boundary search (edges used an odd number of times):
+// a streamed leaf builds its LODs from every face once (repeated_records.h). The rock with
+// every third face repeated (after all the faces, shuffled, a third of them from another
+// corner in the same cyclic order) bakes the same streamed leaves' LODs as the rock itself, but
+// for LOD 0, which keeps the repeats, and its random cuts stay crack-free.
+TEST_F(LodTreeTest, StreamedLeavesBuildTheirLodsFromEveryRepeatedFaceOnce) {
+  samplegen::SampleSpec spec;
+  spec.shape = samplegen::Shape::rock;
+  spec.triangles = 30'000 / kScale;
+  const Result<NodeMesh> rock = samplegen::generate_sample_mesh(spec);
+  ASSERT_TRUE(rock.ok()) << rock.status().message();
+  std::vector<std::uint32_t> repeated = rock->indices;
+  std::vector<std::uint32_t> faces;
+  for (std::uint32_t t = 0; t < rock->triangle_count(); t += 3) faces.push_back(t);
+  std::shuffle(faces.begin(), faces.end(), std::mt19937(7));
+  for (std::size_t i = 0; i < faces.size(); ++i)
+    for (std::size_t k = 0; k < 3; ++k) repeated.push_back(rock->indices[3 * std::size_t{faces[i]} + (i + k) % 3]);
+  PlyWriteOptions write;
+  write.layout = rock->layout;
+  ASSERT_TRUE(write_ply(root_ / "rock-once.ply", write, rock->vertices, rock->indices).ok());
+  ASSERT_TRUE(write_ply(root_ / "rock-repeated.ply", write, rock->vertices, repeated).ok());
+
+  BakeOptions once = options(root_ / "rock-once.ply", "repeats-once");
+  once.max_depth = 1;
+  once.max_tris = static_cast<std::uint32_t>(300 / kScale);
+  once.memory_budget_bytes = (9 << 20) / kScale;  // every leaf over the cap, as above
+  BakeOptions twice = once;
+  twice.input = root_ / "rock-repeated.ply";
+  twice.output = root_ / "repeats-twice";
+  const LoadedTree a = bake_and_load(once);
+  const LoadedTree b = bake_and_load(twice);
+  const std::uint64_t cap = max_depth_leaf_triangles(once.memory_budget_bytes, a.manifest.layout, once.max_tris);
+  ASSERT_EQ(a.manifest.nodes.size(), b.manifest.nodes.size());
+  std::size_t leaves = 0;
+  for (std::size_t i = 0; i < a.manifest.nodes.size(); ++i) {
+    const NodeInfo& n = a.manifest.nodes[i];
+    const NodeInfo& m = b.manifest.nodes[i];
+    if (!n.is_leaf()) continue;
+    ++leaves;
+    ASSERT_GT(n.source_triangles, cap) << n.path;
+    EXPECT_GT(m.lods[0].triangles, n.lods[0].triangles) << n.path;
+    ASSERT_GE(n.lods.size(), 2u) << n.path;
+    ASSERT_EQ(m.lods.size(), n.lods.size()) << n.path;
+    for (std::size_t k = 1; k < n.lods.size(); ++k) {
+      EXPECT_TRUE(b.lods[i][k] == a.lods[i][k]) << n.path << " LOD " << k;
+      EXPECT_EQ(m.lods[k].error, n.lods[k].error) << n.path << " LOD " << k;
+    }
+  }
+  EXPECT_EQ(leaves, 8u);
+  expect_random_cuts_add_no_open_edge(b, true);
 }
 
 }  // namespace

@@ -156,7 +156,8 @@ Result<OctreeBudget> divide_octree_budget(const BakeOptions& options, VertexLayo
 // what an in-memory leaf of that size does, the chunks it reads its records in a fraction of
 // that; it runs alone). The node work reserve covers that share (divide_octree_budget).
 constexpr std::uint64_t kMaxDepthLeafShare = 4;
-// A streamed leaf's sorts (its records by triangle id, its edges) take 1 / this of the budget.
+// A streamed leaf's sorts (its records by triangle id, its repeated faces, its edges) take 1 / this
+// of the budget, one at a time.
 constexpr std::uint64_t kStreamedSortShare = 16;
 // A streamed leaf reads its records in chunks of this many leaves of max_depth_leaf_triangles:
 // a chunk costs about 3 records per triangle (records, indexed mesh, hash slots), a fifth of

@@ -23,6 +23,7 @@
 #include "octolod/bake/soup.h"
 #include "octolod/formats/node_file.h"
 #include "quadric.h"
+#include "repeated_records.h"
 #include "tree_paths.h"
 #include "wedges.h"
 
@@ -174,11 +175,12 @@ class StreamedLeafBuilder {
         layout_(options.layout),
         record_bytes_(soup_record_bytes(options.layout)) {}
 
-  // LOD 0's counts and bounds, the area, and (with LODs) the edge file of the boundary search.
-  Status survey(const fs::path& edges) {
+  // The records' counts and bounds (LOD 0's), their area, and with `edges` the edge file of the
+  // boundary search.
+  Status survey(const fs::path* edges) {
     std::optional<RecordWriter> edge_writer;
-    if (options_.build_lods) {
-      auto writer = RecordWriter::create(edges, kEdgeBytes, std::size_t{1} << 20);
+    if (edges) {
+      auto writer = RecordWriter::create(*edges, kEdgeBytes, std::size_t{1} << 20);
       if (!writer.ok()) return writer.status();
       edge_writer.emplace(std::move(writer).value());
     }
@@ -616,18 +618,31 @@ Result<TempFile> LeafRecordSpill::finish() {
 Result<StreamedLeafLods> build_streamed_leaf(const fs::path& records, const fs::path& root,
                                              const std::string& dir,
                                              const StreamedLeafOptions& options) {
-  StreamedLeafBuilder builder(records, options);
+  // The LODs from every face once (repeated_records.h); LOD 0 keeps the records as they are.
+  std::optional<TempFile> once;
+  if (options.build_lods) {
+    auto without = without_repeated_records(records, options.layout, options.work_dir, options.sort_budget_bytes);
+    if (!without.ok()) return without.status();
+    once = std::move(without).value();
+  }
+  StreamedLeafBuilder builder(once ? once->path() : records, options);
   builder.set_origin();
   TempFile edges = make_temp_file(options.work_dir, "leaf-edges");
   TempFile sorted_edges = make_temp_file(options.work_dir, "leaf-edges-sorted");
-  OCTOLOD_RETURN_IF_ERROR(builder.survey(edges.path()));
+  OCTOLOD_RETURN_IF_ERROR(builder.survey(options.build_lods ? &edges.path() : nullptr));
 
   StreamedLeafLods result;
-  const Survey& survey = builder.surveyed();
   if (!options.merged_children) {
+    std::optional<StreamedLeafBuilder> with_repeats;
+    if (once) {
+      with_repeats.emplace(records, options);
+      OCTOLOD_RETURN_IF_ERROR(with_repeats->survey(nullptr));
+    }
+    StreamedLeafBuilder& lod0 = with_repeats ? *with_repeats : builder;
     const std::string file = lod_file_name(dir, 0);
-    auto bytes = builder.write_lod0(root / file);
+    auto bytes = lod0.write_lod0(root / file);
     if (!bytes.ok()) return bytes.status();
+    const Survey& survey = lod0.surveyed();
     result.lod0.triangles = static_cast<std::uint32_t>(survey.triangles);
     result.lod0.vertices = static_cast<std::uint32_t>(survey.vertices);
     result.lod0.bytes = bytes.value();
@@ -635,6 +650,7 @@ Result<StreamedLeafLods> build_streamed_leaf(const fs::path& records, const fs::
     result.lod0_bounds = survey.bounds;
     if (!options.build_lods) return result;
   }
+  const Survey& survey = builder.surveyed();
 
   OCTOLOD_RETURN_IF_ERROR(builder.find_boundary_positions(edges.path(), sorted_edges.path()));
   const std::uint64_t limit = std::min<std::uint64_t>(options.max_lod1_triangles, survey.triangles / 2);

@@ -8,26 +8,26 @@
 //          a vertex shared by two chunks is stored once per chunk) and appended to one node
 //          file (NodeFileWriter), so readers see an ordinary node file.
 //   LOD 1  vertex clustering on a uniform grid inside the node (Lindstrom 2000, "Out-of-core
-//          simplification of large polygonal models"): the node's boundary edges (used by an
-//          odd number of its triangles, vertex identity = position bits, as find_boundary) are
-//          found by an external sort of edge records and stay unchanged (their positions are
-//          clusters of their own, vertex records kept bit-identical), so cuts mixing this
-//          leaf's LODs with its neighbours' never crack. Every other corner falls in its grid
-//          cell; a cell's position comes from its area-weighted plane quadric (quadric.h) as in
-//          the in-memory grid (place_representative). Its corners are split into wedges by
-//          their attributes (streamed_leaf.cpp, AttributeWedges: a corner joins a wedge whose
-//          first corner is within 60 degrees of normal and 0.25 of every colour and uv channel,
-//          so the two sides of a seam are never averaged; the in-memory grid's wedges follow
-//          the mesh's edges, which streaming cannot hold), each wedge the area-weighted mean of
-//          its corners' attributes (normals renormalized, colours clamped). Triangles whose
-//          corners fall in three distinct clusters survive as build_clustered_mesh's rule keeps
-//          them (kept_copies per cluster triple: once when odd, a two-sided pair for a thin
-//          sheet), with the wedges of a source triangle. The resolution is searched by counting passes
-//          (a resolution whose distinct cluster triples pass twice the limit counts as too
-//          fine, so memory stays bounded by the limit) for at most min(max_lod1_triangles,
-//          half the input) triangles. Its error bound is the max over chunks of
-//          hausdorff_upper_bound(chunk, LOD 1): the distance from the input decomposes over
-//          any partition of the input.
+//          simplification of large polygonal models"), from the records without repeated faces
+//          (repeated_records.h: a copy of the file when some repeat): the node's boundary edges
+//          (used by an odd number of its triangles, vertex identity = position bits, as
+//          find_boundary) are found by an external sort of edge records and stay unchanged (their
+//          positions are clusters of their own, vertex records kept bit-identical), so cuts mixing
+//          this leaf's LODs with its neighbours' never crack. Every other corner falls in its grid
+//          cell; a cell's position comes from its area-weighted plane quadric (quadric.h) as in the
+//          in-memory grid (place_representative). Its corners are split into wedges by their
+//          attributes (streamed_leaf.cpp, AttributeWedges: a corner joins a wedge whose first
+//          corner is within 60 degrees of normal and 0.25 of every colour and uv channel, so the
+//          two sides of a seam are never averaged; the in-memory grid's wedges follow the mesh's
+//          edges, which streaming cannot hold), each wedge the area-weighted mean of its corners'
+//          attributes (normals renormalized, colours clamped). Triangles whose corners fall in
+//          three distinct clusters survive as build_clustered_mesh's rule keeps them (kept_copies
+//          per cluster triple: once when odd, a two-sided pair for a thin sheet), with the wedges
+//          of a source triangle. The resolution is searched by counting passes (a resolution whose
+//          distinct cluster triples pass twice the limit counts as too fine, so memory stays
+//          bounded by the limit) for at most min(max_lod1_triangles, half the input) triangles. Its
+//          error bound is the max over chunks of hausdorff_upper_bound(chunk, LOD 1): the distance
+//          from the input decomposes over any partition of the input.
 //   LOD 2+ build_lods from LOD 1 and its error, in memory.
 //
 // The same path builds an internal node whose children's LODs are too large to merge in memory
@@ -35,9 +35,10 @@
 // gets no LOD 0 of its own.
 //
 // Memory: one chunk of records and its indexed mesh, the grid's occupied cells (about LOD 1's
-// vertices) and candidate triangles (at most 2 x the limit), the boundary's positions, LOD 1
-// and its chain, and the edge sort's budget. Not bounded: a leaf whose locked boundary alone
-// keeps more than the limit gets no LOD 1, and its parent then merges its LOD 0 from the file.
+// vertices) and candidate triangles (at most 2 x the limit), the boundary's positions, LOD 1 and
+// its chain, and the sorts' budget (the repeated faces', then the edges'). Not bounded: a leaf
+// whose locked boundary alone keeps more than the limit gets no LOD 1, and its parent then merges
+// its LOD 0 from the file.
 // Deterministic: a pure function of the record file and options.
 #pragma once
 
