@@ -48,7 +48,6 @@ constexpr double kPrismTrusted2 = 2.0 * 2.0;
 // and cost 6% of the bake's CPU (docs/benchmarks.md).
 constexpr double kLocalTrusted2 = 1.1 * 1.1;
 constexpr double kInfinity = std::numeric_limits<double>::infinity();
-constexpr std::uint32_t kNone = 0xFFFFFFFFu;
 
 std::vector<Triangle> triangle_corners(const NodeMesh& mesh) {
   std::vector<Triangle> all(mesh.triangle_count());
@@ -80,11 +79,11 @@ double settle_pending(std::vector<Pending>& pending, double total2, Closer&& clo
 double bvh_bound2(const NodeMesh& input, const PartBounder& bounder, const measure::TriangleBvh& bvh,
                   const std::vector<std::uint32_t>& triangles, double total2) {
   // nearest output triangle of every corner; their max is a lower bound
-  std::vector<std::uint32_t> nearest_triangle(input.vertex_count(), kNone);
+  std::vector<std::uint32_t> nearest_triangle(input.vertex_count(), kNoTriangle);
   for (std::uint32_t t : triangles) {
     for (std::size_t k = 0; k < 3; ++k) {
       const std::uint32_t v = input.indices[3 * std::size_t{t} + k];
-      if (nearest_triangle[v] != kNone) continue;
+      if (nearest_triangle[v] != kNoTriangle) continue;
       const Vec p = vertex_position(input, v);
       nearest_triangle[v] = closest_triangle(bvh, p);
       total2 = std::max(total2, bounder.distance2(p, nearest_triangle[v]));
@@ -119,8 +118,8 @@ double hausdorff_upper_bound(const NodeMesh& input, const NodeMesh& output, cons
   const bool have_fans = !hints.vertex_cluster.empty() && !hints.fan_offset.empty();
   const bool have_images = !hints.nearby_output_triangle.empty();
   auto image_of = [&](std::size_t t) {
-    const std::uint32_t image = have_images ? hints.nearby_output_triangle[t] : kNone;
-    return image < output.triangle_count() ? image : kNone;
+    const std::uint32_t image = have_images ? hints.nearby_output_triangle[t] : kNoTriangle;
+    return image < output.triangle_count() ? image : kNoTriangle;
   };
   auto fan = [&](std::uint32_t v) {
     const std::uint32_t c = hints.vertex_cluster[v];
@@ -135,7 +134,7 @@ double hausdorff_upper_bound(const NodeMesh& input, const NodeMesh& output, cons
   // the input triangles around it: a candidate of the triangles at the vertex. On the way, every
   // input triangle's bound against its image alone (the max of its corners' distances to it),
   // the first of its single candidates below.
-  std::vector<std::uint32_t> vertex_best(input.vertex_count(), kNone);
+  std::vector<std::uint32_t> vertex_best(input.vertex_count(), kNoTriangle);
   std::vector<double> vertex_best2(input.vertex_count(), kInfinity);  // distance2 to vertex_best (once it has one)
   auto offer = [&](std::uint32_t v, std::uint32_t triangle) {
     if (vertex_best[v] == triangle) return vertex_best2[v];  // the image of a triangle next to it, measured
@@ -145,7 +144,7 @@ double hausdorff_upper_bound(const NodeMesh& input, const NodeMesh& output, cons
   };
   std::vector<double> image_bound2(input.triangle_count(), kInfinity);
   for (std::size_t t = 0; t < input.triangle_count(); ++t)
-    if (const std::uint32_t image = image_of(t); image != kNone) {
+    if (const std::uint32_t image = image_of(t); image != kNoTriangle) {
       double worst2 = 0.0;
       for (std::size_t k = 0; k < 3; ++k) worst2 = std::max(worst2, offer(input.indices[3 * t + k], image));
       image_bound2[t] = worst2;
@@ -204,7 +203,7 @@ double hausdorff_upper_bound(const NodeMesh& input, const NodeMesh& output, cons
     own = {image_of(t), vertex_best[corner[0]], vertex_best[corner[1]], vertex_best[corner[2]]};
     std::sort(own.begin(), own.end());
     const auto distinct = static_cast<std::size_t>(std::unique(own.begin(), own.end()) - own.begin());
-    return std::span<const std::uint32_t>(own.data(), own[distinct - 1] == kNone ? distinct - 1 : distinct);
+    return std::span<const std::uint32_t>(own.data(), own[distinct - 1] == kNoTriangle ? distinct - 1 : distinct);
   };
   // A triangle's candidates for the prism pieces: `few` (its image and its corners' nearest
   // triangles, which cover most triangles that straddle an output edge), then the fans around its

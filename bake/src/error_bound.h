@@ -21,10 +21,13 @@ namespace octolod::bake {
 // once to each stored error, not to every step's bound, so that it does not add up along chains.
 double hausdorff_upper_bound(const NodeMesh& input, const NodeMesh& output);
 
+// An index that names no triangle.
+inline constexpr std::uint32_t kNoTriangle = 0xFFFFFFFFu;
+
 // Where a vertex clustering sent the input (all spans index the input / output meshes given
 // with them; empty spans = unknown).
 struct ImageHints {
-  // Per input triangle: an output triangle at or next to its image, or 0xFFFFFFFF.
+  // Per input triangle: an output triangle at or next to its image, or kNoTriangle.
   std::span<const std::uint32_t> nearby_output_triangle;
   // Per input vertex: its cluster. Per cluster c: the output triangles with a corner at c's
   // representative are fan_triangle[fan_offset[c] .. fan_offset[c+1]).

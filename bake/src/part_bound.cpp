@@ -144,7 +144,6 @@ class DirectedEdges {
 };
 
 using Across = std::array<std::uint32_t, 3>;
-constexpr std::uint32_t kNoTriangle = PartBounder::kNone;
 
 // Per triangle and edge k (corner k to k + 1): the first other triangle that runs it backwards.
 std::vector<Across> triangles_across(std::size_t triangle_count, const DirectedEdges& edges) {
@@ -405,7 +404,7 @@ bool PartBounder::Prism::closed() const {
       // the first triangle across is a piece at all but 1 in 8,000 open sides (200K rock); else
       // any other piece that runs the edge backwards
       const std::uint32_t first = bounder_.across_[of][e];
-      if (first != kNone && std::find(piece_triangle_, pieces_end, first) != pieces_end) continue;
+      if (first != kNoTriangle && std::find(piece_triangle_, pieces_end, first) != pieces_end) continue;
       const Vec3d &from = output[of][e + 1 == 3 ? 0 : e + 1], &to = output[of][e];
       bool across = false;
       for (std::size_t j = 0; j < piece_count_ && !across; ++j) {

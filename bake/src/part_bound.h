@@ -10,6 +10,7 @@
 #include <span>
 #include <vector>
 
+#include "error_bound.h"
 #include "octolod/measure/triangle_bvh.h"
 #include "point_triangle.h"
 
@@ -22,9 +23,6 @@ std::uint32_t closest_triangle(const measure::TriangleBvh& bvh, const Vec3d& p);
 
 class PartBounder {
  public:
-  // No output triangle (an index that names none).
-  static constexpr std::uint32_t kNone = 0xFFFFFFFFu;
-
   // `output`: the output mesh's triangles (double corners), indexed as the candidates below;
   // borrowed, must outlive the bounder. Keeps 68 bytes per triangle (normal, bounding sphere,
   // the triangles across its edges), and a copy of the output re-wound where its winding is
@@ -119,8 +117,8 @@ class PartBounder {
   std::vector<Vec3d> normal_;    // per output triangle: twice its area times its unit normal
   std::vector<Sphere> sphere_;   // per output triangle: bounding_sphere, widened by a hair for rounding
   // per output triangle and edge k (corner k to k + 1): the first other triangle that runs the
-  // edge backwards (corner positions equal), or kNone (the prism's cover proof looks for it among
-  // the pieces)
+  // edge backwards (corner positions equal), or kNoTriangle (the prism's cover proof looks for
+  // it among the pieces)
   std::vector<std::array<std::uint32_t, 3>> across_;
 };
 

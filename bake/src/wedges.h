@@ -95,7 +95,6 @@ void place_representative(const double* quadric, const double* mean, const Clamp
 // would are flipped (diagonal_flips.h), and folded three-triangle fans replaced by their
 // neighbours' triangle (folded_fans.h); neither changes the boundary mod 2. Unused vertices are
 // removed; output vertices are in (cluster, smallest vertex id of the wedge) order.
-inline constexpr std::uint32_t kNoTriangle = 0xFFFFFFFFu;
 struct ClusteredMesh {
   NodeMesh mesh;
   // Per input triangle: an output triangle at or next to its image (the image itself when it
