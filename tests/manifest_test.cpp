@@ -171,6 +171,8 @@ TEST(Manifest, NamesTheNodeAndMemberThatCannotBeRead) {
       {node1_bounds, "\"min\": [", "\"min\": [\"x\", ", "node 1: \"bounds.min\" holds a value that is not a number"},
       {node1_bounds, "\"bounds\": {", "\"bounds\": [{", "node 1: \"bounds\" is not an object"},
       {node1_bounds, "\"min\": [", "\"min\": [1e39, ", "node 1: \"bounds.min\" holds a number beyond the float range"},
+      {node1_bounds, "\"max\": [", "\"maximum\": [", "node 1: no \"bounds.max\""},
+      {0, "\"source_triangles\": 0", "\"source\": 0", "node 1: no \"source_triangles\""},
   };
   for (const Case& c : cases) {
     std::string bad = text;

@@ -1,6 +1,7 @@
 // ManifestSax, see manifest_sax.h.
 #include "manifest_sax.h"
 
+#include <array>
 #include <string_view>
 #include <utility>
 
@@ -32,17 +33,6 @@ enum LodMember : std::uint32_t {
   kFile = 1u << 4,
   kAllLodMembers = (1u << 5) - 1,
 };
-
-const char* const kNodeMemberNames[] = {"path", "depth", "parent", "children", "cell.min", "cell.max",
-                                        "bounds.min", "bounds.max", "source_triangles", "lods"};
-const char* const kLodMemberNames[] = {"triangles", "vertices", "error", "bytes", "file"};
-
-template <std::size_t N>
-std::string first_missing(std::uint32_t seen, const char* const (&names)[N]) {
-  for (std::size_t i = 0; i < N; ++i)
-    if (!(seen & (1u << i))) return names[i];
-  return {};
-}
 
 }  // namespace
 
@@ -216,6 +206,35 @@ std::string_view name_of(Key key) {
 
 std::string quoted(Key key) { return "\"" + std::string(name_of(key)) + "\""; }
 
+// The members the bits of node_seen_ and lod_seen_ stand for, in bit order: a key, or a box's
+// key and its "min" or "max".
+constexpr std::array<std::pair<Key, Key>, 10> kNodeMembers{{{Key::path, Key::other},
+                                                            {Key::depth, Key::other},
+                                                            {Key::parent, Key::other},
+                                                            {Key::children, Key::other},
+                                                            {Key::cell, Key::min},
+                                                            {Key::cell, Key::max},
+                                                            {Key::bounds, Key::min},
+                                                            {Key::bounds, Key::max},
+                                                            {Key::source_triangles, Key::other},
+                                                            {Key::lods, Key::other}}};
+constexpr std::array<std::pair<Key, Key>, 5> kLodMembers{{{Key::triangles, Key::other},
+                                                          {Key::vertices, Key::other},
+                                                          {Key::error, Key::other},
+                                                          {Key::bytes, Key::other},
+                                                          {Key::file, Key::other}}};
+
+// The first member whose bit `seen` lacks, quoted ("cell.min" for a box member).
+template <std::size_t N>
+std::string first_missing(std::uint32_t seen, const std::array<std::pair<Key, Key>, N>& members) {
+  for (std::size_t i = 0; i < N; ++i)
+    if (!(seen & (1u << i))) {
+      const auto [key, part] = members[i];
+      return "\"" + std::string(name_of(key)) + (part == Key::other ? "" : "." + std::string(name_of(part))) + "\"";
+    }
+  return {};
+}
+
 }  // namespace
 
 void ManifestSax::start_node() {
@@ -379,7 +398,7 @@ void ManifestSax::node_close() {
   const std::size_t level = depth_ - 2;  // of the container closing
   const Key member = node_key_[1];
   if (level == 1) {
-    if (node_seen_ != kAllNodeMembers) return fail("no \"" + first_missing(node_seen_, kNodeMemberNames) + "\"");
+    if (node_seen_ != kAllNodeMembers) return fail("no " + first_missing(node_seen_, kNodeMembers));
     nodes_.push_back(std::move(node_));
   } else if (level == 2) {
     if (member == Key::children) {
@@ -391,8 +410,7 @@ void ManifestSax::node_close() {
   } else if (level == 3) {
     if (member == Key::lods) {
       if (lod_seen_ != kAllLodMembers)
-        return fail("lod " + std::to_string(node_.lods.size() - 1) + ": no \"" +
-                    first_missing(lod_seen_, kLodMemberNames) + "\"");
+        return fail("lod " + std::to_string(node_.lods.size() - 1) + ": no " + first_missing(lod_seen_, kLodMembers));
     } else {
       if (node_index_[3] != 3) return fail(box_member() + " does not have 3 elements");
       const bool min = node_key_[2] == Key::min;
