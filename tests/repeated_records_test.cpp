@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cerrno>
 #include <cstddef>
 #include <cstdint>
 #include <filesystem>
@@ -18,6 +19,7 @@
 #include <vector>
 
 #include "octolod/bake/soup.h"
+#include "record_file.h"
 #include "repeated_records.h"
 
 namespace octolod::bake {
@@ -93,6 +95,40 @@ TEST_F(RepeatedRecords, DropsEveryLaterCopyOfAFaceFromAnyCornerButNotItsBack) {
   // nothing but the input files is left in the work directory
   once.value().reset();
   EXPECT_EQ(std::distance(fs::directory_iterator(dir_), fs::directory_iterator()), 2);
+}
+
+// Out of space or a failed read at any point of the sorts and the copy: an io error naming a
+// file, and no temporary file left behind.
+TEST_F(RepeatedRecords, AFailedWriteOrReadAnywhereLeavesNoTemporaryFile) {
+  std::vector<std::byte> input;
+  const std::vector<float> vertices{0, 0, 0, 0, 0, 1, 0, 0, 0, 0, 0, 1, 0, 0, 0, 1, 1, 0, 0, 0};
+  for (std::uint32_t t = 0; t < 6000; ++t) {  // four faces, each about 1,500 times
+    const std::array<std::uint32_t, 3> v{t % 4, (t + 1) % 4, (t + 2) % 4};
+    std::array<std::byte, kRecordBytes> record{};
+    store_soup_record(record.data(), kLayout, vertices.data(), v.data(), t);
+    input.insert(input.end(), record.begin(), record.end());
+  }
+  write_file(dir_ / "records", input);
+  for (const ScopedIoFault::Op op : {ScopedIoFault::Op::write, ScopedIoFault::Op::read}) {
+    std::uint64_t total = 0;
+    {
+      ScopedIoFault never(op, std::uint64_t{1} << 40, EIO);
+      auto once = without_repeated_records(dir_ / "records", kLayout, dir_, kSortBudget);
+      ASSERT_TRUE(once.ok() && once->has_value()) << once.status().message();
+      total = never.bytes_seen();
+    }
+    ASSERT_GT(total, input.size());
+    for (std::uint64_t after = 0; after < total; after += total / 16) {
+      {
+        ScopedIoFault fault(op, after, EIO);
+        auto once = without_repeated_records(dir_ / "records", kLayout, dir_, kSortBudget);
+        ASSERT_FALSE(once.ok()) << "fault after " << after;
+        EXPECT_EQ(once.status().code(), ErrorCode::io);
+        EXPECT_NE(once.status().message().find(dir_.string()), std::string::npos) << once.status().message();
+      }
+      EXPECT_EQ(std::distance(fs::directory_iterator(dir_), fs::directory_iterator()), 1) << "fault after " << after;
+    }
+  }
 }
 
 TEST_F(RepeatedRecords, AMissingFileIsAnErrorNamingIt) {
