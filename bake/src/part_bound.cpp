@@ -164,10 +164,12 @@ std::vector<Across> triangles_across(std::size_t triangle_count, const DirectedE
 // Inconsistent means at least a quarter of the piece's shared edges have only triangles that run
 // them alike (just one) on the other side (on 1M rocks at most 7%: the clustering's folds,
 // triangles re-wound to face like their sources, which the prism needs as they are; a mesh
-// wound at random: 45-55%). `across` is triangles_across.
-std::vector<std::uint8_t> rewinding(std::span<const Triangle3d> triangles, const DirectedEdges& edges,
+// wound at random: 45-55%). `across` is triangles_across; `normal`, per triangle, twice its area
+// times its unit normal.
+std::vector<std::uint8_t> rewinding(std::span<const Vec3d> normal, const DirectedEdges& edges,
                                     const std::vector<Across>& across) {
-  const std::size_t edge_count = 3 * triangles.size();
+  const std::size_t triangle_count = normal.size();
+  const std::size_t edge_count = 3 * triangle_count;
   std::vector<std::uint32_t> neighbour(edge_count, kNoTriangle);
   std::vector<std::uint8_t> alike(edge_count, 0);  // the neighbour runs the edge the same way
   bool any_alike = false;
@@ -184,10 +186,10 @@ std::vector<std::uint8_t> rewinding(std::span<const Triangle3d> triangles, const
     any_alike = any_alike || alike[edge];
   }
   if (!any_alike) return {};
-  std::vector<std::uint8_t> flip(triangles.size(), 0), seen(triangles.size(), 0);
+  std::vector<std::uint8_t> flip(triangle_count, 0), seen(triangle_count, 0);
   std::vector<std::uint32_t> piece;
   bool any_flip = false;
-  for (std::size_t seed = 0; seed < triangles.size(); ++seed) {
+  for (std::size_t seed = 0; seed < triangle_count; ++seed) {
     if (seen[seed]) continue;
     piece.assign(1, static_cast<std::uint32_t>(seed));
     seen[seed] = 1;
@@ -195,9 +197,7 @@ std::vector<std::uint8_t> rewinding(std::span<const Triangle3d> triangles, const
     std::size_t shared_edges = 0, alike_edges = 0;
     for (std::size_t i = 0; i < piece.size(); ++i) {
       const std::uint32_t t = piece[i];
-      const Triangle3d& tri = triangles[t];
-      const Vec3d n = cross(sub(tri[1], tri[0]), sub(tri[2], tri[0]));
-      (flip[t] ? flipped_area : kept_area) += std::sqrt(dot(n, n));
+      (flip[t] ? flipped_area : kept_area) += std::sqrt(dot(normal[t], normal[t]));
       for (std::size_t k = 0; k < 3; ++k) {
         const std::uint32_t other = neighbour[3 * t + k];
         if (other == kNoTriangle) continue;
@@ -224,21 +224,25 @@ std::uint32_t closest_triangle(const measure::TriangleBvh& bvh, const Vec3d& p) 
 }
 
 PartBounder::PartBounder(std::span<const Triangle3d> output) : output_(output) {
+  normal_.reserve(output_.size());
+  for (const Triangle3d& tri : output_) normal_.push_back(cross(sub(tri[1], tri[0]), sub(tri[2], tri[0])));
   {
     const DirectedEdges edges(output_);
     across_ = triangles_across(output_.size(), edges);
-    if (const std::vector<std::uint8_t> flip = rewinding(output_, edges, across_); !flip.empty()) {
+    if (const std::vector<std::uint8_t> flip = rewinding(normal_, edges, across_); !flip.empty()) {
       oriented_.assign(output.begin(), output.end());
       for (std::size_t t = 0; t < flip.size(); ++t)
-        if (flip[t]) std::swap(oriented_[t][1], oriented_[t][2]);
+        if (flip[t]) {
+          // corners 1 and 2 swapped: the cross product negated, to the bit
+          std::swap(oriented_[t][1], oriented_[t][2]);
+          normal_[t] = {-normal_[t][0], -normal_[t][1], -normal_[t][2]};
+        }
       output_ = oriented_;
     }
   }
   if (!oriented_.empty()) across_ = triangles_across(output_.size(), DirectedEdges(output_));
-  normal_.reserve(output_.size());
   sphere_.reserve(output_.size());
   for (const Triangle3d& tri : output_) {
-    normal_.push_back(cross(sub(tri[1], tri[0]), sub(tri[2], tri[0])));
     const Sphere sphere = bounding_sphere(tri[0], tri[1], tri[2]);
     sphere_.push_back({sphere.center, sphere.radius * (1.0 + 1e-9)});
   }
