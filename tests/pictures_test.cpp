@@ -1,7 +1,11 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
+
 #include <glm/gtc/matrix_transform.hpp>
 
+#include "heat_scale.h"
 #include "image.h"
 #include "line_chart.h"
 #include "offscreen_renderer.h"
@@ -95,6 +99,44 @@ TEST(LineChart, TextUsesTheFontAndSkipsUnknownCharacters) {
   for (int y = 0; y < 10; ++y)
     for (int x = 0; x < 40; ++x) ink += image.get(x, y) == 0;
   EXPECT_EQ(ink, 10);  // the glyph '1' has 10 lit pixels; '~' draws nothing
+}
+
+
+// The error pictures' scale: hue 240 (1 - t) degrees, fully saturated, clamped outside [0, 1].
+TEST(HeatScale, HueFallsLinearlyFromBlueToRed) {
+  auto hue = [](glm::vec3 c) {
+    const float hi = std::max({c.r, c.g, c.b}), lo = std::min({c.r, c.g, c.b});
+    float h = hi == c.r ? std::fmod((c.g - c.b) / (hi - lo), 6.0f) : hi == c.g ? (c.b - c.r) / (hi - lo) + 2.0f
+                                                                              : (c.r - c.g) / (hi - lo) + 4.0f;
+    h *= 60.0f;
+    return h < 0 ? h + 360.0f : h;
+  };
+  for (int i = 0; i <= 20; ++i) {
+    const float t = static_cast<float>(i) / 20.0f;
+    const glm::vec3 c = heat_colour(t);
+    EXPECT_NEAR(hue(c), 240.0f * (1.0f - t), 1e-3f) << t;
+    EXPECT_EQ(std::max({c.r, c.g, c.b}), 1.0f) << t;
+    EXPECT_EQ(std::min({c.r, c.g, c.b}), 0.0f) << t;
+  }
+  EXPECT_EQ(heat_colour(-1.0f), heat_colour(0.0f));
+  EXPECT_EQ(heat_colour(7.0f), heat_colour(1.0f));
+}
+
+TEST(HeatScale, BarRunsBlueToRedWithItsEndsLabelledBelow) {
+  Image image(200, 40, 0x000000);
+  draw_heat_scale(image, 10, 4, 180, 10, "0", "1.5", 0xffffff);
+  EXPECT_EQ(image.get(10, 8), 0x0000ffu);
+  EXPECT_EQ(image.get(189, 8), 0xff0000u);
+  EXPECT_EQ(image.get(9, 8), 0x000000u);  // nothing outside the bar
+  auto text_pixels = [&](int x0, int x1) {
+    int n = 0;
+    for (int y = 14; y < 40; ++y)
+      for (int x = x0; x < x1; ++x) n += image.get(x, y) == 0xffffffu;
+    return n;
+  };
+  EXPECT_GT(text_pixels(10, 30), 0);    // "0" under the left end
+  EXPECT_GT(text_pixels(150, 190), 0);  // "1.5" under the right end
+  EXPECT_EQ(text_pixels(40, 140), 0);
 }
 
 }  // namespace

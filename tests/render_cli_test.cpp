@@ -251,6 +251,57 @@ TEST_F(RenderCli, DemoPictureShowsAtLeastTwoDetailTints) {
   std::filesystem::remove_all(dir);
 }
 
+// `compare --pictures`: one PNG per cut, 800 x 600 pixels per panel (the cut, then the reference)
+// and a 48-pixel scale strip, every sampled point coloured by its distance to the input. The
+// finest cut is the input's own triangles: every pixel blue (hue near 240). A coarse one and
+// its reference show warmer hues, and their scale is far above the finest cut's.
+TEST_F(RenderCli, ComparePicturesColourTheCutsByTheirDistanceToTheInput) {
+  const auto dir = scratch_dir("compare");
+  const auto ply = dir / "rock.ply";
+  ASSERT_EQ(octolod("sample --shape rock --triangles 20000 -o " + ply.string(), dir).exit_code, 0);
+  ASSERT_EQ(octolod("bake " + ply.string() + " -o " + (dir / "rock").string() + " --memory 64M", dir).exit_code, 0);
+  // the panels' pixels: below the captions, above the scale strip
+  auto panel_hues = [](const Picture& picture, int panel) {
+    std::vector<double> hues;
+    for (int y = 40; y < 600; ++y)
+      for (int x = 800 * panel; x < 800 * (panel + 1); ++x) {
+        const std::uint32_t p = picture.get(x, y);
+        if (p != kBackground) hues.push_back(hue_degrees((p >> 16) & 0xFF, (p >> 8) & 0xFF, p & 0xFF));
+      }
+    return hues;
+  };
+
+  const CliRun finest = octolod("--json compare " + ply.string() + " " + (dir / "rock").string() +
+                                    " --errors 0 --no-reference --pictures " + (dir / "finest").string(),
+                                dir);
+  ASSERT_EQ(finest.exit_code, 0);
+  const nlohmann::json& row = finest.json.at("rows").at(0);
+  EXPECT_EQ(row.at("triangles"), 20000);
+  const Picture one = read_png(row.at("picture").get<std::string>());
+  EXPECT_EQ(one.width, 800);
+  EXPECT_EQ(one.height, 648);
+  const std::vector<double> blue = panel_hues(one, 0);
+  EXPECT_GT(blue.size(), 800u * 600u / 20);
+  EXPECT_EQ(std::count_if(blue.begin(), blue.end(), [](double h) { return h < 200.0; }), 0);
+  const double diagonal = finest.json.at("diagonal").get<double>();
+  EXPECT_LT(row.at("picture_scale").get<double>(), 1e-4 * diagonal);
+
+  const CliRun coarse = octolod("--json compare " + ply.string() + " " + (dir / "rock").string() +
+                                    " --fractions 0.02 --pictures " + (dir / "coarse").string(),
+                                dir);
+  ASSERT_EQ(coarse.exit_code, 0);
+  const nlohmann::json& coarse_row = coarse.json.at("rows").at(0);
+  EXPECT_GT(coarse_row.at("picture_scale").get<double>(), 1e-3 * diagonal);
+  const Picture two = read_png(coarse_row.at("picture").get<std::string>());
+  EXPECT_EQ(two.width, 1600);
+  for (int panel = 0; panel < 2; ++panel) {
+    const std::vector<double> hues = panel_hues(two, panel);
+    EXPECT_GT(hues.size(), 800u * 600u / 20) << panel;
+    EXPECT_GT(std::count_if(hues.begin(), hues.end(), [](double h) { return h < 180.0; }), 0) << panel;
+  }
+  std::filesystem::remove_all(dir);
+}
+
 TEST_F(RenderCli, MalformedCameraIsAUsageErrorAndWritesNothing) {
   const auto dir = scratch_dir("usage");
   runtime::testing::write_tree(runtime::testing::make_full_octree(2), dir / "tree");

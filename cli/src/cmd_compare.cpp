@@ -3,6 +3,8 @@
 // distance to the input, next to the same numbers for the QSlim-style reference (OpenMesh
 // Decimater, octolod/measure/reference.h) at the same triangle count, and their ratios — the
 // comparison of seed 002 Tables 5.2 (triangles and time per level) and 5.4 (error per level).
+// With --pictures, each cut and its reference are also drawn coloured by their distance to the
+// input (error_picture.h), for a technical artist to see where a LOD departs from the model.
 //
 // Exit codes: 1 usage, 2 a malformed file or an input that is not the one the tree was baked
 // from, 4 a file cannot be read.
@@ -16,6 +18,7 @@
 
 #include "command.h"
 #include "commands.h"
+#include "error_picture.h"
 #include "mesh_file.h"
 #include "metro_json.h"
 #include "octolod/formats/manifest.h"
@@ -34,6 +37,8 @@ struct Row {
   measure::MetroReport cut_metro;
   std::uint64_t reference_triangles = 0;
   measure::MetroReport reference_metro;  // unset (0 samples) without the reference
+  std::string picture;                   // its error picture's path (empty without --pictures)
+  double picture_scale = 0;              // the distance its colours top out at, model units
 };
 
 // Error targets whose uniform cuts come closest (in log scale) to each wanted fraction of the
@@ -149,6 +154,11 @@ nlohmann::json rows_json(const std::vector<Row>& rows, const Manifest& manifest,
          {"rms", r.cut_metro.two_sided.rms},
          {"hausdorff", r.cut_metro.two_sided.max},
          {"cut", metro_json(r.cut_metro)}});
+  for (std::size_t i = 0; i < rows.size(); ++i)
+    if (!rows[i].picture.empty()) {
+      out[i]["picture"] = rows[i].picture;
+      out[i]["picture_scale"] = rows[i].picture_scale;
+    }
   if (!with_reference) return out;
   for (std::size_t i = 0; i < rows.size(); ++i) {
     const Row& r = rows[i];
@@ -162,6 +172,37 @@ nlohmann::json rows_json(const std::vector<Row>& rows, const Manifest& manifest,
         number_or_null(ratio(r.cut_metro.two_sided.max, r.reference_metro.two_sided.max));
   }
   return out;
+}
+
+// Pixels of one panel of an error picture.
+constexpr int kPanelWidth = 800, kPanelHeight = 600;
+
+// One error picture per row into `dir` (created): the row's cut and, when there is one, its
+// reference at the same count, from the overview camera of the input's bounds.
+Status write_pictures(const std::string& dir, const std::filesystem::path& root, const Manifest& manifest,
+                      const NodeMesh& input, const std::vector<NodeMesh>& references, std::vector<Row>& rows,
+                      Progress& progress) {
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (ec) return io_error(dir + ": cannot create the pictures' directory: " + ec.message());
+  const measure::TriangleBvh surface(input.vertices, input.layout.floats(), input.indices);
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    Row& row = rows[i];
+    progress.message("compare: picture " + std::to_string(i + 1) + "/" + std::to_string(rows.size()));
+    Result<NodeMesh> cut = load_cut_mesh(root, manifest, row.cut);
+    if (!cut.ok()) return cut.status();
+    std::vector<ErrorPanel> panels{{&cut.value(), "CUT " + std::to_string(row.summary.triangles) + " TRIANGLES"}};
+    if (i < references.size())
+      panels.push_back({&references[i], "REFERENCE " + std::to_string(references[i].triangle_count()) + " TRIANGLES"});
+    Result<ErrorPicture> picture = render_error_picture(panels, surface, input.bounds(), kPanelWidth, kPanelHeight);
+    if (!picture.ok()) return picture.status();
+    row.picture = (std::filesystem::path(dir) / ("cut-" + std::to_string(i + 1) + "-" +
+                                                 std::to_string(row.summary.triangles) + ".png"))
+                      .string();
+    row.picture_scale = picture->scale;
+    OCTOLOD_RETURN_IF_ERROR(write_png(row.picture, picture->image));
+  }
+  return {};
 }
 
 }  // namespace
@@ -229,16 +270,16 @@ int run_compare(const CompareArgs& args, const CommandContext& context) {
   }
 
   measure::ReferenceStats reference_stats;
+  std::vector<NodeMesh> references;  // one per row, with the reference
   if (!args.no_reference && !rows.empty()) {
     progress.message("compare: reference decimation to " + std::to_string(counts.size()) +
                      " triangle counts");
-    Result<std::vector<NodeMesh>> references =
-        measure::reference_simplify_ladder(input->mesh, counts, &reference_stats);
-    if (!references.ok())
-      return report(Status(references.status().code(),
-                           args.input + ": " + references.status().message()));
+    Result<std::vector<NodeMesh>> ladder = measure::reference_simplify_ladder(input->mesh, counts, &reference_stats);
+    if (!ladder.ok())
+      return report(Status(ladder.status().code(), args.input + ": " + ladder.status().message()));
+    references = std::move(ladder).value();
     for (std::size_t i = 0; i < rows.size(); ++i) {
-      const NodeMesh& reference = references.value()[i];
+      const NodeMesh& reference = references[i];
       rows[i].reference_triangles = reference.triangle_count();
       Result<measure::MetroReport> m = measure::evaluate(input->mesh, reference, metro);
       if (!m.ok())
@@ -248,6 +289,11 @@ int run_compare(const CompareArgs& args, const CommandContext& context) {
       rows[i].reference_metro = m.value();
       place_maxima(rows[i].reference_metro, manifest->origin);
     }
+  }
+
+  if (!args.pictures.empty()) {
+    const Status written = write_pictures(args.pictures, root, manifest.value(), input->mesh, references, rows, progress);
+    if (!written.ok()) return report(written);
   }
 
   if (context.json) {
@@ -268,6 +314,10 @@ int run_compare(const CompareArgs& args, const CommandContext& context) {
                 manifest->parameters.method.empty() ? "none" : manifest->parameters.method.c_str(),
                 rows.empty() ? 0.0 : rows.front().cut_metro.diagonal);
   print_table(rows, manifest.value(), args.markdown, !args.no_reference);
+  for (const Row& r : rows)
+    if (!r.picture.empty())
+      std::printf("picture %s: %llu triangles, colours 0 .. %.4g model units from the input\n", r.picture.c_str(),
+                  static_cast<unsigned long long>(r.summary.triangles), r.picture_scale);
   return 0;
 }
 

@@ -94,6 +94,10 @@ void add_compare_command(CLI::App& app, CommandContext& context) {
   command->add_flag("--no-reference", args->no_reference,
                     "Skip the reference decimation (the cut columns only; much faster on "
                     "large inputs)");
+  command->add_option("--pictures", args->pictures,
+                      "Directory (created) for one PNG per cut: the cut and the reference side by "
+                      "side, framed like render's overview, every vertex coloured by its distance "
+                      "to the input (blue none, red the picture's largest)");
   command->callback([args, &context] { context.exit_code = run_compare(*args, context); });
 }
 

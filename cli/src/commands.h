@@ -35,6 +35,7 @@ struct CompareArgs {
   std::uint64_t samples = 0;
   bool markdown = false;
   bool no_reference = false;
+  std::string pictures;  // directory for the error pictures; empty: none
 };
 
 struct EvalArgs {

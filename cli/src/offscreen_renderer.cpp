@@ -96,7 +96,7 @@ struct DrawArrays {
   std::vector<float> positions, normals, colors;
 };
 
-DrawArrays expand(const NodeMesh& mesh, glm::vec3 tint) {
+DrawArrays expand(const NodeMesh& mesh, glm::vec3 tint, float tint_share) {
   DrawArrays out;
   const std::size_t stride = mesh.layout.floats();
   const std::size_t corners = mesh.indices.size();
@@ -116,7 +116,7 @@ DrawArrays expand(const NodeMesh& mesh, glm::vec3 tint) {
       out.normals.insert(out.normals.end(), {n.x, n.y, n.z});
       glm::vec3 base = mesh.layout.color ? glm::make_vec3(v[k] + mesh.layout.color_offset())
                                          : glm::vec3(0.8f);
-      glm::vec3 c = 0.5f * base + 0.5f * tint;
+      glm::vec3 c = (1.0f - tint_share) * base + tint_share * tint;
       out.colors.insert(out.colors.end(), {c.x, c.y, c.z});
     }
   }
@@ -172,7 +172,7 @@ Result<Image> render_offscreen(std::span<const RenderItem> items, const RenderVi
   gl.EnableClientState(GL_NORMAL_ARRAY);
   gl.EnableClientState(GL_COLOR_ARRAY);
   for (const RenderItem& item : items) {
-    DrawArrays arrays = expand(*item.mesh, item.tint);
+    DrawArrays arrays = expand(*item.mesh, item.tint, item.tint_share);
     gl.VertexPointer(3, GL_FLOAT, 0, arrays.positions.data());
     gl.NormalPointer(GL_FLOAT, 0, arrays.normals.data());
     gl.ColorPointer(3, GL_FLOAT, 0, arrays.colors.data());

@@ -1,6 +1,7 @@
 // Renders node meshes into an Image with real OpenGL on Mesa's OSMesa (llvmpipe): works on
 // CPU-only machines and in CI, no display needed. Shaded with a headlight; every mesh is tinted
-// by its own colour so a picture shows which node LODs a cut is made of.
+// by its own colour so a picture shows which node LODs a cut is made of (or drawn in its vertex
+// colours alone, as the error pictures are).
 #pragma once
 
 #include <glm/glm.hpp>
@@ -15,7 +16,8 @@ namespace octolod::cli {
 
 struct RenderItem {
   const NodeMesh* mesh = nullptr;  // positions in model units; must outlive the call
-  glm::vec3 tint{1.0f};            // linear RGB 0..1, mixed half-and-half with the surface colour
+  glm::vec3 tint{1.0f};            // linear RGB 0..1, mixed with the surface colour
+  float tint_share = 0.5f;         // of the tint in the mix: 0 draws the mesh's own colours
 };
 
 struct RenderView {
