@@ -251,20 +251,22 @@ TEST_F(RenderCli, DemoPictureShowsAtLeastTwoDetailTints) {
   std::filesystem::remove_all(dir);
 }
 
-// `compare --pictures`: one PNG per cut, 800 x 600 pixels per panel (the cut, then the reference)
-// and a 48-pixel scale strip, every sampled point coloured by its distance to the input. The
-// finest cut is the input's own triangles: every pixel blue (hue near 240). A coarse one and
-// its reference show warmer hues, and their scale is far above the finest cut's.
-TEST_F(RenderCli, ComparePicturesColourTheCutsByTheirDistanceToTheInput) {
+// `compare --pictures`: one PNG per cut, 800 x 600 pixels per panel and a 48-pixel scale strip:
+// the cut coloured by its distance to the input, and the input by its distance to the cut; with
+// the reference, a second row (the reference to the input, the input to the reference). The
+// finest cut is the input's own triangles: every pixel of both panels blue (hue near 240). A
+// coarse cut and its reference show warmer hues in all four panels, and their scale is far
+// above the finest cut's.
+TEST_F(RenderCli, ComparePicturesColourTheCutsAndTheInputByTheirDistances) {
   const auto dir = scratch_dir("compare");
   const auto ply = dir / "rock.ply";
   ASSERT_EQ(octolod("sample --shape rock --triangles 20000 -o " + ply.string(), dir).exit_code, 0);
   ASSERT_EQ(octolod("bake " + ply.string() + " -o " + (dir / "rock").string() + " --memory 64M", dir).exit_code, 0);
-  // the panels' pixels: below the captions, above the scale strip
-  auto panel_hues = [](const Picture& picture, int panel) {
+  // a panel's pixels, below its caption
+  auto panel_hues = [](const Picture& picture, int column, int row) {
     std::vector<double> hues;
-    for (int y = 40; y < 600; ++y)
-      for (int x = 800 * panel; x < 800 * (panel + 1); ++x) {
+    for (int y = 600 * row + 40; y < 600 * (row + 1); ++y)
+      for (int x = 800 * column; x < 800 * (column + 1); ++x) {
         const std::uint32_t p = picture.get(x, y);
         if (p != kBackground) hues.push_back(hue_degrees((p >> 16) & 0xFF, (p >> 8) & 0xFF, p & 0xFF));
       }
@@ -278,11 +280,13 @@ TEST_F(RenderCli, ComparePicturesColourTheCutsByTheirDistanceToTheInput) {
   const nlohmann::json& row = finest.json.at("rows").at(0);
   EXPECT_EQ(row.at("triangles"), 20000);
   const Picture one = read_png(row.at("picture").get<std::string>());
-  EXPECT_EQ(one.width, 800);
+  EXPECT_EQ(one.width, 1600);
   EXPECT_EQ(one.height, 648);
-  const std::vector<double> blue = panel_hues(one, 0);
-  EXPECT_GT(blue.size(), 800u * 600u / 20);
-  EXPECT_EQ(std::count_if(blue.begin(), blue.end(), [](double h) { return h < 200.0; }), 0);
+  for (int column = 0; column < 2; ++column) {
+    const std::vector<double> hues = panel_hues(one, column, 0);
+    EXPECT_GT(hues.size(), 800u * 600u / 20) << column;
+    EXPECT_EQ(std::count_if(hues.begin(), hues.end(), [](double h) { return h < 200.0; }), 0) << column;
+  }
   const double diagonal = finest.json.at("diagonal").get<double>();
   EXPECT_LT(row.at("picture_scale").get<double>(), 1e-4 * diagonal);
 
@@ -292,10 +296,11 @@ TEST_F(RenderCli, ComparePicturesColourTheCutsByTheirDistanceToTheInput) {
   ASSERT_EQ(coarse.exit_code, 0);
   const nlohmann::json& coarse_row = coarse.json.at("rows").at(0);
   EXPECT_GT(coarse_row.at("picture_scale").get<double>(), 1e-3 * diagonal);
-  const Picture two = read_png(coarse_row.at("picture").get<std::string>());
-  EXPECT_EQ(two.width, 1600);
-  for (int panel = 0; panel < 2; ++panel) {
-    const std::vector<double> hues = panel_hues(two, panel);
+  const Picture four = read_png(coarse_row.at("picture").get<std::string>());
+  EXPECT_EQ(four.width, 1600);
+  EXPECT_EQ(four.height, 1248);
+  for (int panel = 0; panel < 4; ++panel) {
+    const std::vector<double> hues = panel_hues(four, panel % 2, panel / 2);
     EXPECT_GT(hues.size(), 800u * 600u / 20) << panel;
     EXPECT_GT(std::count_if(hues.begin(), hues.end(), [](double h) { return h < 180.0; }), 0) << panel;
   }

@@ -177,24 +177,36 @@ nlohmann::json rows_json(const std::vector<Row>& rows, const Manifest& manifest,
 // Pixels of one panel of an error picture.
 constexpr int kPanelWidth = 800, kPanelHeight = 600;
 
-// One error picture per row into `dir` (created): the row's cut and, when there is one, its
-// reference at the same count, from the overview camera of the input's bounds.
+// One error picture per row into `dir` (created), from the overview camera of the input's
+// bounds: the row's cut coloured by its distance to the input and the input by its distance to
+// the cut, side by side; with the reference, the meshes to the input in the first row (the cut,
+// the reference) and the input to each in the second.
 Status write_pictures(const std::string& dir, const std::filesystem::path& root, const Manifest& manifest,
                       const NodeMesh& input, const std::vector<NodeMesh>& references, std::vector<Row>& rows,
                       Progress& progress) {
   std::error_code ec;
   std::filesystem::create_directories(dir, ec);
   if (ec) return io_error(dir + ": cannot create the pictures' directory: " + ec.message());
-  const measure::TriangleBvh surface(input.vertices, input.layout.floats(), input.indices);
+  const measure::TriangleBvh input_surface(input.vertices, input.layout.floats(), input.indices);
   for (std::size_t i = 0; i < rows.size(); ++i) {
     Row& row = rows[i];
     progress.message("compare: picture " + std::to_string(i + 1) + "/" + std::to_string(rows.size()));
     Result<NodeMesh> cut = load_cut_mesh(root, manifest, row.cut);
     if (!cut.ok()) return cut.status();
-    std::vector<ErrorPanel> panels{{&cut.value(), "CUT " + std::to_string(row.summary.triangles) + " TRIANGLES"}};
-    if (i < references.size())
-      panels.push_back({&references[i], "REFERENCE " + std::to_string(references[i].triangle_count()) + " TRIANGLES"});
-    Result<ErrorPicture> picture = render_error_picture(panels, surface, input.bounds(), kPanelWidth, kPanelHeight);
+    const measure::TriangleBvh cut_surface(cut->vertices, cut->layout.floats(), cut->indices);
+    const std::string count = " (" + std::to_string(row.summary.triangles) + " TRIANGLES)";
+    std::vector<ErrorPanel> panels{{&cut.value(), &input_surface, "CUT" + count + " TO INPUT"},
+                                   {&input, &cut_surface, "INPUT TO CUT"}};
+    measure::TriangleBvh reference_surface;
+    if (i < references.size()) {
+      const NodeMesh& reference = references[i];
+      reference_surface = measure::TriangleBvh(reference.vertices, reference.layout.floats(), reference.indices);
+      const std::string reference_count = " (" + std::to_string(reference.triangle_count()) + " TRIANGLES)";
+      // rows: the meshes to the input, the input to the meshes
+      panels = {panels[0], {&reference, &input_surface, "REFERENCE" + reference_count + " TO INPUT"}, panels[1],
+                {&input, &reference_surface, "INPUT TO REFERENCE"}};
+    }
+    Result<ErrorPicture> picture = render_error_picture(panels, 2, input.bounds(), kPanelWidth, kPanelHeight);
     if (!picture.ok()) return picture.status();
     row.picture = (std::filesystem::path(dir) / ("cut-" + std::to_string(i + 1) + "-" +
                                                  std::to_string(row.summary.triangles) + ".png"))
@@ -316,7 +328,7 @@ int run_compare(const CompareArgs& args, const CommandContext& context) {
   print_table(rows, manifest.value(), args.markdown, !args.no_reference);
   for (const Row& r : rows)
     if (!r.picture.empty())
-      std::printf("picture %s: %llu triangles, colours 0 .. %.4g model units from the input\n", r.picture.c_str(),
+      std::printf("picture %s: %llu triangles, colours 0 .. %.4g model units\n", r.picture.c_str(),
                   static_cast<unsigned long long>(r.summary.triangles), r.picture_scale);
   return 0;
 }

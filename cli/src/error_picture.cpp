@@ -28,21 +28,29 @@ constexpr double kSampleSpacing = 1.0 / 200.0;
 // of a grid of its barycentric coordinates, n the smallest that makes their edges at most
 // `edge` (at most kMaxSplit): the points its distances are sampled at. A triangle's error lies
 // between its corners (an edge collapse keeps its vertices on the input), so corners alone
-// would miss it.
+// would miss it. The mesh's own vertices come first, shared by the triangles that need no cut.
 NodeMesh sampled_surface(const NodeMesh& mesh, double edge) {
   constexpr int kMaxSplit = 32;
   const std::size_t stride = mesh.layout.floats();
   const std::size_t kept = mesh.layout.normal ? 6 : 3;  // position, normal
   NodeMesh out;
   out.layout = VertexLayout{mesh.layout.normal, false, false};
+  out.vertices.reserve(mesh.vertex_count() * kept);
+  for (std::size_t v = 0; v < mesh.vertex_count(); ++v)
+    out.vertices.insert(out.vertices.end(), &mesh.vertices[v * stride], &mesh.vertices[v * stride] + kept);
   for (std::size_t t = 0; t < mesh.triangle_count(); ++t) {
+    const std::uint32_t* index = &mesh.indices[3 * t];
     const float* corner[3];
-    for (std::size_t k = 0; k < 3; ++k) corner[k] = &mesh.vertices[mesh.indices[3 * t + k] * stride];
+    for (std::size_t k = 0; k < 3; ++k) corner[k] = &mesh.vertices[index[k] * stride];
     double longest = 0;
     for (std::size_t k = 0; k < 3; ++k)
       longest = std::max(longest, static_cast<double>(glm::distance(glm::make_vec3(corner[k]),
                                                                      glm::make_vec3(corner[(k + 1) % 3]))));
     const int n = std::clamp(static_cast<int>(std::ceil(longest / edge)), 1, kMaxSplit);
+    if (n == 1) {
+      out.indices.insert(out.indices.end(), index, index + 3);
+      continue;
+    }
     const auto first = static_cast<std::uint32_t>(out.vertex_count());
     // grid point (i, j), i + j <= n: corner 0 + i/n (corner 1 - corner 0) + j/n (corner 2 - corner 0)
     auto id = [&](int i, int j) { return first + static_cast<std::uint32_t>(i * (2 * n + 3 - i) / 2 + j); };
@@ -98,14 +106,15 @@ std::string distance_text(double d) {
 
 }  // namespace
 
-Result<ErrorPicture> render_error_picture(std::span<const ErrorPanel> panels, const measure::TriangleBvh& surface,
-                                          const Bounds& frame, int panel_width, int panel_height) {
-  std::vector<NodeMesh> sampled;
+Result<ErrorPicture> render_error_picture(std::span<const ErrorPanel> panels, int columns, const Bounds& frame,
+                                          int panel_width, int panel_height) {
+  // the scale needs every panel's distances before the first is coloured; the samples are
+  // made again for the colouring, one panel at a time
+  const double spacing = kSampleSpacing * frame.diagonal();
   std::vector<std::vector<float>> distances;
   double scale = 1e-6 * frame.diagonal();
   for (const ErrorPanel& panel : panels) {
-    sampled.push_back(sampled_surface(*panel.mesh, kSampleSpacing * frame.diagonal()));
-    distances.push_back(vertex_distances(sampled.back(), surface));
+    distances.push_back(vertex_distances(sampled_surface(*panel.mesh, spacing), *panel.surface));
     for (float d : distances.back()) scale = std::max(scale, static_cast<double>(d));
   }
   Lens lens;
@@ -121,21 +130,23 @@ Result<ErrorPicture> render_error_picture(std::span<const ErrorPanel> panels, co
 
   ErrorPicture picture;
   picture.scale = scale;
-  const int width = panel_width * static_cast<int>(panels.size());
-  picture.image = Image(width, panel_height + kScaleStrip, kBackground);
+  const int rows = (static_cast<int>(panels.size()) + columns - 1) / columns;
+  const int width = panel_width * columns, panels_height = panel_height * rows;
+  picture.image = Image(width, panels_height + kScaleStrip, kBackground);
   for (std::size_t i = 0; i < panels.size(); ++i) {
-    const NodeMesh coloured = coloured_by_distance(sampled[i], distances[i], scale);
+    const NodeMesh coloured = coloured_by_distance(sampled_surface(*panels[i].mesh, spacing), distances[i], scale);
+    distances[i] = {};
     const RenderItem item{&coloured, glm::vec3(0.0f), 0.0f};
     Result<Image> rendered = render_offscreen({&item, 1}, view);
     if (!rendered.ok()) return rendered.status();
-    const int left = panel_width * static_cast<int>(i);
+    const int left = panel_width * (static_cast<int>(i) % columns), top = panel_height * (static_cast<int>(i) / columns);
     for (int y = 0; y < panel_height; ++y)
-      for (int x = 0; x < panel_width; ++x) picture.image.set(left + x, y, rendered->get(x, y));
-    draw_text(picture.image, left + 12, 12, panels[i].caption, kText, 2);
+      for (int x = 0; x < panel_width; ++x) picture.image.set(left + x, top + y, rendered->get(x, y));
+    draw_text(picture.image, left + 12, top + 12, panels[i].caption, kText, 2);
   }
   constexpr int kMargin = 16;
-  draw_heat_scale(picture.image, kMargin, panel_height + 8, width - 2 * kMargin, 12, "0",
-                  distance_text(scale) + " FROM INPUT", kText);
+  draw_heat_scale(picture.image, kMargin, panels_height + 8, width - 2 * kMargin, 12, "0",
+                  distance_text(scale) + " MODEL UNITS", kText);
   return picture;
 }
 

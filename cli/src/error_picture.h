@@ -1,6 +1,9 @@
-// Metro-style pictures for `octolod compare --pictures`: meshes side by side, seen by one camera
-// that frames the input, every sampled point coloured by its distance to the input's surface
-// (heat_scale.h: blue none, red the top of the scale), the scale drawn under them.
+// Metro-style pictures for `octolod compare --pictures`: meshes in a grid of panels, all seen by
+// one camera that frames the model, every sampled point of each coloured by its distance to
+// another surface (heat_scale.h: blue none, red the top of the scale), the scale drawn under
+// them. Both directions of a comparison show: a LOD coloured by its distance to the input shows
+// where it strays from the model; the input coloured by its distance to the LOD shows what the
+// LOD lost (a building that vanished is red there and absent from the LOD's own panel).
 #pragma once
 
 #include <span>
@@ -15,28 +18,30 @@
 namespace octolod::cli {
 
 struct ErrorPanel {
-  const NodeMesh* mesh = nullptr;  // model units, the frame of `surface`; borrowed for the call
-  std::string caption;             // drawn at the panel's top left (draw_text's font)
+  const NodeMesh* mesh = nullptr;                 // drawn; model units; borrowed for the call
+  const measure::TriangleBvh* surface = nullptr;  // its distances are to this one, in the same frame
+  std::string caption;                            // at the panel's top left (draw_text's font)
 };
 
 struct ErrorPicture {
   Image image;
   // The distance at the top of the colour scale, model units: the largest sampled distance of
-  // all panels (one-sided, from the panels' surfaces to `surface`, at the points of a grid on
-  // each triangle: so it can differ either way from a Metro Hausdorff, which samples at random
-  // both ways), and at least a millionth of the frame's diagonal (so float noise stays blue).
+  // all panels (at the points of a grid on each triangle: so it can differ either way from a
+  // Metro Hausdorff, which samples at random), and at least a millionth of the frame's
+  // diagonal (so float noise stays blue).
   double scale = 0.0;
 };
 
-// Renders the panels (each panel_width x panel_height pixels, left to right) as
-// framing_camera(frame) sees them, their surfaces sampled on a grid of points at most 1/200 of
-// the frame's diagonal apart on each triangle (at most 32 x 32 cells a triangle), every point
-// coloured by its distance to the nearest point of `surface` over the panels' shared scale (the
-// colours interpolated between the points), with the scale's bar and its ends' values under
-// them (the picture is (panel count x panel_width) x (panel_height + 48) pixels). Memory: the
-// samples, about 50 bytes each. Fails (ErrorCode::unsupported) when no OpenGL context can be
-// created.
-Result<ErrorPicture> render_error_picture(std::span<const ErrorPanel> panels, const measure::TriangleBvh& surface,
-                                          const Bounds& frame, int panel_width, int panel_height);
+// Renders the panels, `columns` to a row, each panel_width x panel_height pixels, as
+// framing_camera(frame) sees them. Each panel's surface is sampled on a grid of points at most
+// 1/200 of the frame's diagonal apart on each triangle (at most 32 x 32 cells a triangle; a
+// triangle already that small is sampled at its corners), every point coloured by its distance
+// to the nearest point of the panel's `surface` over the panels' shared scale (colours
+// interpolated between the points). The scale's bar and its ends' values go under the panels:
+// the picture is (columns x panel_width) x (rows x panel_height + 48) pixels. Memory: one
+// panel's samples at a time, about 70 bytes each, and 4 bytes per sample of every panel. Fails
+// (ErrorCode::unsupported) when no OpenGL context can be created.
+Result<ErrorPicture> render_error_picture(std::span<const ErrorPanel> panels, int columns, const Bounds& frame,
+                                          int panel_width, int panel_height);
 
 }  // namespace octolod::cli
