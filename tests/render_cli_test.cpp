@@ -12,6 +12,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <map>
 #include <set>
 #include <string>
@@ -304,6 +305,16 @@ TEST_F(RenderCli, ComparePicturesColourTheCutsAndTheInputByTheirDistances) {
     EXPECT_GT(hues.size(), 800u * 600u / 20) << panel;
     EXPECT_GT(std::count_if(hues.begin(), hues.end(), [](double h) { return h < 180.0; }), 0) << panel;
   }
+
+  // a pictures directory that cannot be made is an I/O error (exit 4) before any measuring
+  std::ofstream(dir / "a-file") << "x";
+  const CliRun blocked = octolod("compare " + ply.string() + " " + (dir / "rock").string() + " --pictures " +
+                                     (dir / "a-file").string(),
+                                 dir);
+  EXPECT_EQ(blocked.exit_code, 4);
+  std::ifstream err(dir / "stderr.txt");
+  const std::string message{std::istreambuf_iterator<char>(err), std::istreambuf_iterator<char>()};
+  EXPECT_NE(message.find("a-file: cannot create the pictures' directory"), std::string::npos) << message;
   std::filesystem::remove_all(dir);
 }
 

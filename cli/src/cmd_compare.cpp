@@ -177,16 +177,13 @@ nlohmann::json rows_json(const std::vector<Row>& rows, const Manifest& manifest,
 // Pixels of one panel of an error picture.
 constexpr int kPanelWidth = 800, kPanelHeight = 600;
 
-// One error picture per row into `dir` (created), from the overview camera of the input's
+// One error picture per row into `dir` (which exists), from the overview camera of the input's
 // bounds: the row's cut coloured by its distance to the input and the input by its distance to
 // the cut, side by side; with the reference, the meshes to the input in the first row (the cut,
 // the reference) and the input to each in the second.
 Status write_pictures(const std::string& dir, const std::filesystem::path& root, const Manifest& manifest,
                       const NodeMesh& input, const std::vector<NodeMesh>& references, std::vector<Row>& rows,
                       Progress& progress) {
-  std::error_code ec;
-  std::filesystem::create_directories(dir, ec);
-  if (ec) return io_error(dir + ": cannot create the pictures' directory: " + ec.message());
   const measure::TriangleBvh input_surface(input.vertices, input.layout.floats(), input.indices);
   for (std::size_t i = 0; i < rows.size(); ++i) {
     Row& row = rows[i];
@@ -230,6 +227,11 @@ int run_compare(const CompareArgs& args, const CommandContext& context) {
   const std::filesystem::path root = args.tree;
   Result<Manifest> manifest = read_tree_manifest(root);
   if (!manifest.ok()) return report(manifest.status());
+  if (!args.pictures.empty()) {  // before the long work: a directory that cannot be made fails now
+    std::error_code ec;
+    std::filesystem::create_directories(args.pictures, ec);
+    if (ec) return report(io_error(args.pictures + ": cannot create the pictures' directory: " + ec.message()));
+  }
   if (manifest->nodes.empty() || manifest->input_triangles == 0)
     return report(bad_input_error(args.tree + ": the tree holds no triangles"));
   Result<MeshFile> input = read_mesh_file(args.input, manifest->origin);  // in the tree's frame
