@@ -1,7 +1,8 @@
 // render_cli_tests: `octolod render` and `octolod walk --frames-png` write pictures of the cut the
-// streaming runtime selects, with every node tinted by its detail level. Runs the CLI built next
-// to the tests (OCTOLOD_CLI) on the synthetic tree of runtime_test_helpers.h written to disk, and
-// on a tree the CLI bakes from a generated rock.
+// streaming runtime selects, with every node tinted by its detail level; `compare --pictures`
+// and `eval --picture` colour meshes by their distance to each other. Runs the CLI built next to
+// the tests (OCTOLOD_CLI) on the synthetic tree of runtime_test_helpers.h written to disk, and on
+// a tree the CLI bakes from a generated rock.
 #include <gtest/gtest.h>
 
 #include <png.h>
@@ -91,6 +92,27 @@ double hue_distance(double a, double b) {
 double level_hue(std::uint32_t level) {
   const glm::vec3 c = 0.5f * glm::vec3(0.8f) + 0.5f * lod_tint(level);
   return hue_degrees(c.r, c.g, c.b);
+}
+
+// Hues of the lit pixels of an error picture's panel (800 x 600 each, `column` and `row` from
+// the top left), below its caption.
+std::vector<double> panel_hues(const Picture& picture, int column, int row) {
+  std::vector<double> hues;
+  for (int y = 600 * row + 40; y < 600 * (row + 1); ++y)
+    for (int x = 800 * column; x < 800 * (column + 1); ++x) {
+      const std::uint32_t p = picture.get(x, y);
+      if (p != kBackground) hues.push_back(hue_degrees((p >> 16) & 0xFF, (p >> 8) & 0xFF, p & 0xFF));
+    }
+  return hues;
+}
+
+std::size_t count_below(const std::vector<double>& hues, double hue) {
+  return static_cast<std::size_t>(std::count_if(hues.begin(), hues.end(), [&](double h) { return h < hue; }));
+}
+
+std::string file_text(const std::filesystem::path& path) {
+  std::ifstream in(path);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
 }
 
 std::filesystem::path scratch_dir(const std::string& name) {
@@ -263,16 +285,6 @@ TEST_F(RenderCli, ComparePicturesColourTheCutsAndTheInputByTheirDistances) {
   const auto ply = dir / "rock.ply";
   ASSERT_EQ(octolod("sample --shape rock --triangles 20000 -o " + ply.string(), dir).exit_code, 0);
   ASSERT_EQ(octolod("bake " + ply.string() + " -o " + (dir / "rock").string() + " --memory 64M", dir).exit_code, 0);
-  // a panel's pixels, below its caption
-  auto panel_hues = [](const Picture& picture, int column, int row) {
-    std::vector<double> hues;
-    for (int y = 600 * row + 40; y < 600 * (row + 1); ++y)
-      for (int x = 800 * column; x < 800 * (column + 1); ++x) {
-        const std::uint32_t p = picture.get(x, y);
-        if (p != kBackground) hues.push_back(hue_degrees((p >> 16) & 0xFF, (p >> 8) & 0xFF, p & 0xFF));
-      }
-    return hues;
-  };
 
   const CliRun finest = octolod("--json compare " + ply.string() + " " + (dir / "rock").string() +
                                     " --errors 0 --no-reference --pictures " + (dir / "finest").string(),
@@ -286,7 +298,7 @@ TEST_F(RenderCli, ComparePicturesColourTheCutsAndTheInputByTheirDistances) {
   for (int column = 0; column < 2; ++column) {
     const std::vector<double> hues = panel_hues(one, column, 0);
     EXPECT_GT(hues.size(), 800u * 600u / 20) << column;
-    EXPECT_EQ(std::count_if(hues.begin(), hues.end(), [](double h) { return h < 200.0; }), 0) << column;
+    EXPECT_EQ(count_below(hues, 200.0), 0u) << column;
   }
   const double diagonal = finest.json.at("diagonal").get<double>();
   EXPECT_LT(row.at("picture_scale").get<double>(), 1e-4 * diagonal);
@@ -303,7 +315,7 @@ TEST_F(RenderCli, ComparePicturesColourTheCutsAndTheInputByTheirDistances) {
   for (int panel = 0; panel < 4; ++panel) {
     const std::vector<double> hues = panel_hues(four, panel % 2, panel / 2);
     EXPECT_GT(hues.size(), 800u * 600u / 20) << panel;
-    EXPECT_GT(std::count_if(hues.begin(), hues.end(), [](double h) { return h < 180.0; }), 0) << panel;
+    EXPECT_GT(count_below(hues, 180.0), 0u) << panel;
   }
 
   // a pictures directory that cannot be made is an I/O error (exit 4) before any measuring
@@ -312,9 +324,43 @@ TEST_F(RenderCli, ComparePicturesColourTheCutsAndTheInputByTheirDistances) {
                                      (dir / "a-file").string(),
                                  dir);
   EXPECT_EQ(blocked.exit_code, 4);
-  std::ifstream err(dir / "stderr.txt");
-  const std::string message{std::istreambuf_iterator<char>(err), std::istreambuf_iterator<char>()};
+  const std::string message = file_text(dir / "stderr.txt");
   EXPECT_NE(message.find("a-file: cannot create the pictures' directory"), std::string::npos) << message;
+  std::filesystem::remove_all(dir);
+}
+
+// `eval --picture`: B coloured by its distance to A next to A by its distance to B. A mesh
+// against itself is blue throughout; against a coarse reference both panels show warmer hues.
+TEST_F(RenderCli, EvalPictureColoursEachMeshByItsDistanceToTheOther) {
+  const auto dir = scratch_dir("eval");
+  const auto ply = dir / "rock.ply", coarse = dir / "coarse.ply";
+  ASSERT_EQ(octolod("sample --shape rock --triangles 20000 -o " + ply.string(), dir).exit_code, 0);
+  ASSERT_EQ(octolod("reference " + ply.string() + " --triangles 400 -o " + coarse.string(), dir).exit_code, 0);
+  const CliRun same = octolod("--json eval " + ply.string() + " " + ply.string() + " --picture " +
+                                  (dir / "same.png").string(),
+                              dir);
+  ASSERT_EQ(same.exit_code, 0);
+  EXPECT_LT(same.json.at("picture").at("scale").get<double>(), 1e-4 * same.json.at("diagonal").get<double>());
+  const Picture blue = read_png(dir / "same.png");
+  ASSERT_EQ(blue.width, 1600);
+  ASSERT_EQ(blue.height, 648);
+  const CliRun apart = octolod("--json eval " + ply.string() + " " + coarse.string() + " --picture " +
+                                   (dir / "apart.png").string(),
+                               dir);
+  ASSERT_EQ(apart.exit_code, 0);
+  const Picture warm = read_png(dir / "apart.png");
+  for (int column = 0; column < 2; ++column) {
+    const std::vector<double> same_hues = panel_hues(blue, column, 0), apart_hues = panel_hues(warm, column, 0);
+    EXPECT_GT(same_hues.size(), 800u * 600u / 20) << column;
+    EXPECT_EQ(count_below(same_hues, 200.0), 0u) << column;
+    EXPECT_GT(count_below(apart_hues, 180.0), 0u) << column;
+  }
+  // nowhere to write it: an I/O error before the measuring
+  const CliRun nowhere = octolod("eval " + ply.string() + " " + coarse.string() + " --picture " +
+                                     (dir / "missing" / "x.png").string(),
+                                 dir);
+  EXPECT_EQ(nowhere.exit_code, 4);
+  EXPECT_NE(file_text(dir / "stderr.txt").find("does not exist"), std::string::npos);
   std::filesystem::remove_all(dir);
 }
 

@@ -3,13 +3,17 @@
 // (octolod/measure/metro.h). Reports mean, RMS and max one way, the other way and pooled (the
 // max pooled is the Hausdorff distance), absolute (model units) and relative to the bounding-box
 // diagonal of A, plus normal-angle, colour and uv deviation at the samples when both have them.
+// With --picture, B coloured by its distance to A next to A coloured by its distance to B
+// (error_picture.h).
 //
 // Exit codes: 1 usage, 2 a file is malformed or has no triangles/area, 4 a file cannot be read.
 #include <cstdio>
+#include <filesystem>
 #include <string>
 
 #include "command.h"
 #include "commands.h"
+#include "error_picture.h"
 #include "mesh_file.h"
 #include "metro_json.h"
 #include "octolod/measure/metro.h"
@@ -32,10 +36,31 @@ void print_deviation(const char* name, const measure::Deviation& d) {
   if (d.compared.uv) std::printf("%-9s uv rms %.6g\n", "", d.uv_rms);
 }
 
+// The picture of B to A and A to B, from the overview camera of both meshes' bounds; its scale.
+Result<double> write_picture(const std::string& path, const NodeMesh& a, const NodeMesh& b) {
+  const measure::TriangleBvh a_surface(a.vertices, a.layout.floats(), a.indices);
+  const measure::TriangleBvh b_surface(b.vertices, b.layout.floats(), b.indices);
+  const ErrorPanel panels[] = {{&b, &a_surface, "B TO A"}, {&a, &b_surface, "A TO B"}};
+  Bounds frame = a.bounds();
+  frame.extend(b.bounds());
+  constexpr int kPanelWidth = 800, kPanelHeight = 600;
+  Result<ErrorPicture> picture = render_error_picture(panels, 2, frame, kPanelWidth, kPanelHeight);
+  if (!picture.ok()) return picture.status();
+  OCTOLOD_RETURN_IF_ERROR(write_png(path, picture->image));
+  return picture->scale;
+}
+
 }  // namespace
 
 int run_eval(const EvalArgs& args, const CommandContext& context) {
   Progress progress(context);
+  if (!args.picture.empty()) {  // before the long work: a picture that has nowhere to go fails now
+    const std::filesystem::path parent = std::filesystem::absolute(args.picture).parent_path();
+    std::error_code ec;
+    if (!std::filesystem::is_directory(parent, ec))
+      return report(io_error(args.picture + ": cannot write the picture: directory " + parent.string() +
+                             " does not exist"));
+  }
   Result<MeshFile> a = read_mesh_file(args.a);
   if (!a.ok()) return report(a.status());
   Result<MeshFile> b = read_mesh_file(args.b, a->origin);  // both in a's frame
@@ -53,6 +78,13 @@ int run_eval(const EvalArgs& args, const CommandContext& context) {
                          r.status().message() + " (a = " + args.a + ", b = " + args.b + ")"));
   progress.finish("eval", r->seconds);
   place_maxima(r.value(), a->origin);
+  double picture_scale = 0.0;
+  if (!args.picture.empty()) {
+    progress.message("eval: picture");
+    Result<double> scale = write_picture(args.picture, a->mesh, b->mesh);
+    if (!scale.ok()) return report(scale.status());
+    picture_scale = scale.value();
+  }
 
   if (context.json) {
     nlohmann::json j = metro_json(r.value());
@@ -63,6 +95,7 @@ int run_eval(const EvalArgs& args, const CommandContext& context) {
               {"triangles", b->mesh.triangle_count()},
               {"layout", b->mesh.layout.describe()}};
     j["seed"] = args.seed;
+    if (!args.picture.empty()) j["picture"] = {{"file", args.picture}, {"scale", picture_scale}};
     print_json(j);
     return 0;
   }
@@ -75,6 +108,8 @@ int run_eval(const EvalArgs& args, const CommandContext& context) {
   print_deviation("b -> a", r->b_to_a);
   print_deviation("two-sided", r->two_sided);
   std::printf("Hausdorff %.6g, %u threads, %.2f s\n", r->two_sided.max, r->threads, r->seconds);
+  if (!args.picture.empty())
+    std::printf("picture %s: b to a, a to b, colours 0 .. %.4g model units\n", args.picture.c_str(), picture_scale);
   return 0;
 }
 

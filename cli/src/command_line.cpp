@@ -118,6 +118,9 @@ void add_eval_command(CLI::App& app, CommandContext& context) {
       ->capture_default_str();
   command->add_option("--threads", args->threads,
                       "Query threads (default: all cores; the numbers do not depend on it)");
+  command->add_option("--picture", args->picture,
+                      "PNG of B coloured by its distance to A next to A coloured by its distance "
+                      "to B, framed like render's overview (blue none, red the largest)");
   command->callback([args, &context] { context.exit_code = run_eval(*args, context); });
 }
 

@@ -44,6 +44,7 @@ struct EvalArgs {
   std::uint64_t samples = 0;
   std::uint64_t seed = 1;
   unsigned threads = 0;
+  std::string picture;  // PNG path for the error picture; empty: none
 };
 
 struct ExportArgs {
