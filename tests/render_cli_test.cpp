@@ -330,7 +330,8 @@ TEST_F(RenderCli, ComparePicturesColourTheCutsAndTheInputByTheirDistances) {
 }
 
 // `eval --picture`: B coloured by its distance to A next to A by its distance to B. A mesh
-// against itself is blue throughout; against a coarse reference both panels show warmer hues.
+// against itself is blue throughout; against a coarse reference both panels show warmer hues,
+// unless --picture-scale puts the red end far above every distance.
 TEST_F(RenderCli, EvalPictureColoursEachMeshByItsDistanceToTheOther) {
   const auto dir = scratch_dir("eval");
   const auto ply = dir / "rock.ply", coarse = dir / "coarse.ply";
@@ -355,6 +356,20 @@ TEST_F(RenderCli, EvalPictureColoursEachMeshByItsDistanceToTheOther) {
     EXPECT_EQ(count_below(same_hues, 200.0), 0u) << column;
     EXPECT_GT(count_below(apart_hues, 180.0), 0u) << column;
   }
+  // a given scale is the picture's: far above every distance, everything is blue
+  const double diagonal = apart.json.at("diagonal").get<double>();
+  const CliRun fixed = octolod("--json eval " + ply.string() + " " + coarse.string() + " --picture " +
+                                   (dir / "fixed.png").string() + " --picture-scale " + std::to_string(10 * diagonal),
+                               dir);
+  ASSERT_EQ(fixed.exit_code, 0);
+  EXPECT_NEAR(fixed.json.at("picture").at("scale").get<double>(), 10 * diagonal, 1e-6 * diagonal);
+  const Picture cold = read_png(dir / "fixed.png");
+  for (int column = 0; column < 2; ++column) EXPECT_EQ(count_below(panel_hues(cold, column, 0), 200.0), 0u) << column;
+  EXPECT_EQ(octolod("eval " + ply.string() + " " + coarse.string() + " --picture " + (dir / "x.png").string() +
+                        " --picture-scale 0",
+                    dir)
+                .exit_code,
+            1);
   // nowhere to write it: an I/O error before the measuring
   const CliRun nowhere = octolod("eval " + ply.string() + " " + coarse.string() + " --picture " +
                                      (dir / "missing" / "x.png").string(),

@@ -180,10 +180,11 @@ constexpr int kPanelWidth = 800, kPanelHeight = 600;
 // One error picture per row into `dir` (which exists), from the overview camera of the input's
 // bounds: the row's cut coloured by its distance to the input and the input by its distance to
 // the cut, side by side; with the reference, the meshes to the input in the first row (the cut,
-// the reference) and the input to each in the second.
-Status write_pictures(const std::string& dir, const std::filesystem::path& root, const Manifest& manifest,
-                      const NodeMesh& input, const std::vector<NodeMesh>& references, std::vector<Row>& rows,
-                      Progress& progress) {
+// the reference) and the input to each in the second. `scale`: the top of the colour scale, or
+// 0 for each picture's largest distance.
+Status write_pictures(const std::string& dir, double scale, const std::filesystem::path& root,
+                      const Manifest& manifest, const NodeMesh& input, const std::vector<NodeMesh>& references,
+                      std::vector<Row>& rows, Progress& progress) {
   const measure::TriangleBvh input_surface(input.vertices, input.layout.floats(), input.indices);
   for (std::size_t i = 0; i < rows.size(); ++i) {
     Row& row = rows[i];
@@ -203,7 +204,7 @@ Status write_pictures(const std::string& dir, const std::filesystem::path& root,
       panels = {panels[0], {&reference, &input_surface, "REFERENCE" + reference_count + " TO INPUT"}, panels[1],
                 {&input, &reference_surface, "INPUT TO REFERENCE"}};
     }
-    Result<ErrorPicture> picture = render_error_picture(panels, 2, input.bounds(), kPanelWidth, kPanelHeight);
+    Result<ErrorPicture> picture = render_error_picture(panels, 2, input.bounds(), kPanelWidth, kPanelHeight, scale);
     if (!picture.ok()) return picture.status();
     row.picture = (std::filesystem::path(dir) / ("cut-" + std::to_string(i + 1) + "-" +
                                                  std::to_string(row.summary.triangles) + ".png"))
@@ -306,7 +307,7 @@ int run_compare(const CompareArgs& args, const CommandContext& context) {
   }
 
   if (!args.pictures.empty()) {
-    const Status written = write_pictures(args.pictures, root, manifest.value(), input->mesh, references, rows, progress);
+    const Status written = write_pictures(args.pictures, args.picture_scale, root, manifest.value(), input->mesh, references, rows, progress);
     if (!written.ok()) return report(written);
   }
 

@@ -36,15 +36,16 @@ void print_deviation(const char* name, const measure::Deviation& d) {
   if (d.compared.uv) std::printf("%-9s uv rms %.6g\n", "", d.uv_rms);
 }
 
-// The picture of B to A and A to B, from the overview camera of both meshes' bounds; its scale.
-Result<double> write_picture(const std::string& path, const NodeMesh& a, const NodeMesh& b) {
+// The picture of B to A and A to B, from the overview camera of both meshes' bounds, with the
+// given top of its colour scale (0: its largest distance); that scale.
+Result<double> write_picture(const std::string& path, const NodeMesh& a, const NodeMesh& b, double scale) {
   const measure::TriangleBvh a_surface(a.vertices, a.layout.floats(), a.indices);
   const measure::TriangleBvh b_surface(b.vertices, b.layout.floats(), b.indices);
   const ErrorPanel panels[] = {{&b, &a_surface, "B TO A"}, {&a, &b_surface, "A TO B"}};
   Bounds frame = a.bounds();
   frame.extend(b.bounds());
   constexpr int kPanelWidth = 800, kPanelHeight = 600;
-  Result<ErrorPicture> picture = render_error_picture(panels, 2, frame, kPanelWidth, kPanelHeight);
+  Result<ErrorPicture> picture = render_error_picture(panels, 2, frame, kPanelWidth, kPanelHeight, scale);
   if (!picture.ok()) return picture.status();
   OCTOLOD_RETURN_IF_ERROR(write_png(path, picture->image));
   return picture->scale;
@@ -81,7 +82,7 @@ int run_eval(const EvalArgs& args, const CommandContext& context) {
   double picture_scale = 0.0;
   if (!args.picture.empty()) {
     progress.message("eval: picture");
-    Result<double> scale = write_picture(args.picture, a->mesh, b->mesh);
+    Result<double> scale = write_picture(args.picture, a->mesh, b->mesh, args.picture_scale);
     if (!scale.ok()) return report(scale.status());
     picture_scale = scale.value();
   }

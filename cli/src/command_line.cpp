@@ -98,6 +98,11 @@ void add_compare_command(CLI::App& app, CommandContext& context) {
                       "Directory (created) for one PNG per cut: the cut and the reference side by "
                       "side, framed like render's overview, every vertex coloured by its distance "
                       "to the input (blue none, red the picture's largest)");
+  command
+      ->add_option("--picture-scale", args->picture_scale,
+                   "Distance (model units) at the red end of the pictures' colour scale, the same "
+                   "for every picture (default: each picture's largest)")
+      ->check(CLI::PositiveNumber);
   command->callback([args, &context] { context.exit_code = run_compare(*args, context); });
 }
 
@@ -121,6 +126,11 @@ void add_eval_command(CLI::App& app, CommandContext& context) {
   command->add_option("--picture", args->picture,
                       "PNG of B coloured by its distance to A next to A coloured by its distance "
                       "to B, framed like render's overview (blue none, red the largest)");
+  command
+      ->add_option("--picture-scale", args->picture_scale,
+                   "Distance (model units) at the red end of the picture's colour scale (default: "
+                   "its largest)")
+      ->check(CLI::PositiveNumber);
   command->callback([args, &context] { context.exit_code = run_eval(*args, context); });
 }
 

@@ -35,7 +35,8 @@ struct CompareArgs {
   std::uint64_t samples = 0;
   bool markdown = false;
   bool no_reference = false;
-  std::string pictures;  // directory for the error pictures; empty: none
+  std::string pictures;       // directory for the error pictures; empty: none
+  double picture_scale = 0.0;  // top of their colour scale, model units; 0: each picture's largest
 };
 
 struct EvalArgs {
@@ -44,7 +45,8 @@ struct EvalArgs {
   std::uint64_t samples = 0;
   std::uint64_t seed = 1;
   unsigned threads = 0;
-  std::string picture;  // PNG path for the error picture; empty: none
+  std::string picture;         // PNG path for the error picture; empty: none
+  double picture_scale = 0.0;  // top of its colour scale, model units; 0: its largest distance
 };
 
 struct ExportArgs {

@@ -107,15 +107,17 @@ std::string distance_text(double d) {
 }  // namespace
 
 Result<ErrorPicture> render_error_picture(std::span<const ErrorPanel> panels, int columns, const Bounds& frame,
-                                          int panel_width, int panel_height) {
+                                          int panel_width, int panel_height, double scale) {
   // the scale needs every panel's distances before the first is coloured; the samples are
   // made again for the colouring, one panel at a time
   const double spacing = kSampleSpacing * frame.diagonal();
   std::vector<std::vector<float>> distances;
-  double scale = 1e-6 * frame.diagonal();
+  const bool given = scale > 0.0;
+  if (!given) scale = 1e-6 * frame.diagonal();
   for (const ErrorPanel& panel : panels) {
     distances.push_back(vertex_distances(sampled_surface(*panel.mesh, spacing), *panel.surface));
-    for (float d : distances.back()) scale = std::max(scale, static_cast<double>(d));
+    if (!given)
+      for (float d : distances.back()) scale = std::max(scale, static_cast<double>(d));
   }
   Lens lens;
   lens.width = panel_width;
