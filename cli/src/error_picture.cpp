@@ -17,7 +17,6 @@
 namespace octolod::cli {
 namespace {
 
-constexpr std::uint32_t kBackground = 0x20242c;  // RenderView's
 constexpr std::uint32_t kText = 0xe0e0e0;
 constexpr int kScaleStrip = 48;  // pixels under the panels: the bar and its labels
 // Distances are sampled at most this fraction of the frame's diagonal apart (the framing camera
@@ -119,6 +118,7 @@ Result<ErrorPicture> render_error_picture(std::span<const ErrorPanel> panels, in
     if (!given)
       for (float d : distances.back()) scale = std::max(scale, static_cast<double>(d));
   }
+  if (!(scale > 0.0)) scale = 1.0;  // every panel a point at no distance: all blue
   Lens lens;
   lens.width = panel_width;
   lens.height = panel_height;
@@ -128,13 +128,12 @@ Result<ErrorPicture> render_error_picture(std::span<const ErrorPanel> panels, in
   view.projection = camera.projection;
   view.width = panel_width;
   view.height = panel_height;
-  view.background = kBackground;
 
   ErrorPicture picture;
   picture.scale = scale;
   const int rows = (static_cast<int>(panels.size()) + columns - 1) / columns;
   const int width = panel_width * columns, panels_height = panel_height * rows;
-  picture.image = Image(width, panels_height + kScaleStrip, kBackground);
+  picture.image = Image(width, panels_height + kScaleStrip, view.background);
   for (std::size_t i = 0; i < panels.size(); ++i) {
     const NodeMesh coloured = coloured_by_distance(sampled_surface(*panels[i].mesh, spacing), distances[i], scale);
     distances[i] = {};
