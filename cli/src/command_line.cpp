@@ -95,9 +95,10 @@ void add_compare_command(CLI::App& app, CommandContext& context) {
                     "Skip the reference decimation (the cut columns only; much faster on "
                     "large inputs)");
   command->add_option("--pictures", args->pictures,
-                      "Directory (created) for one PNG per cut: the cut and the reference side by "
-                      "side, framed like render's overview, every vertex coloured by its distance "
-                      "to the input (blue none, red the picture's largest)");
+                      "Directory (created) for one PNG per cut, framed like render's overview: the "
+                      "cut coloured by its distance to the input next to the input coloured by its "
+                      "distance to the cut, and a row the same for the reference (blue none, red "
+                      "the picture's largest)");
   command
       ->add_option("--picture-scale", args->picture_scale,
                    "Distance (model units) at the red end of the pictures' colour scale, the same "
