@@ -174,9 +174,6 @@ nlohmann::json rows_json(const std::vector<Row>& rows, const Manifest& manifest,
   return out;
 }
 
-// Pixels of one panel of an error picture.
-constexpr int kPanelWidth = 800, kPanelHeight = 600;
-
 // One error picture per row into `dir` (which exists), from the overview camera of the input's
 // bounds: the row's cut coloured by its distance to the input and the input by its distance to
 // the cut, side by side; with the reference, the meshes to the input in the first row (the cut,
@@ -204,7 +201,7 @@ Status write_pictures(const std::string& dir, double scale, const std::filesyste
       panels = {panels[0], {&reference, &input_surface, "REFERENCE" + reference_count + " TO INPUT"}, panels[1],
                 {&input, &reference_surface, "INPUT TO REFERENCE"}};
     }
-    Result<ErrorPicture> picture = render_error_picture(panels, 2, input.bounds(), kPanelWidth, kPanelHeight, scale);
+    Result<ErrorPicture> picture = render_error_picture(panels, 2, input.bounds(), scale);
     if (!picture.ok()) return picture.status();
     row.picture = (std::filesystem::path(dir) / ("cut-" + std::to_string(i + 1) + "-" +
                                                  std::to_string(row.summary.triangles) + ".png"))

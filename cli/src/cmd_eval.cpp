@@ -44,8 +44,7 @@ Result<double> write_picture(const std::string& path, const NodeMesh& a, const N
   const ErrorPanel panels[] = {{&b, &a_surface, "B TO A"}, {&a, &b_surface, "A TO B"}};
   Bounds frame = a.bounds();
   frame.extend(b.bounds());
-  constexpr int kPanelWidth = 800, kPanelHeight = 600;
-  Result<ErrorPicture> picture = render_error_picture(panels, 2, frame, kPanelWidth, kPanelHeight, scale);
+  Result<ErrorPicture> picture = render_error_picture(panels, 2, frame, scale);
   if (!picture.ok()) return picture.status();
   OCTOLOD_RETURN_IF_ERROR(write_png(path, picture->image));
   return picture->scale;

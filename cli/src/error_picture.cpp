@@ -106,7 +106,8 @@ std::string distance_text(double d) {
 }  // namespace
 
 Result<ErrorPicture> render_error_picture(std::span<const ErrorPanel> panels, int columns, const Bounds& frame,
-                                          int panel_width, int panel_height, double scale) {
+                                          double scale) {
+  constexpr int panel_width = kErrorPanelWidth, panel_height = kErrorPanelHeight;
   // the scale needs every panel's distances before the first is coloured; the samples are
   // made again for the colouring, one panel at a time
   const double spacing = kSampleSpacing * frame.diagonal();

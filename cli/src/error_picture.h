@@ -32,17 +32,20 @@ struct ErrorPicture {
   double scale = 0.0;
 };
 
-// Renders the panels, `columns` to a row, each panel_width x panel_height pixels, as
+// Pixels of one panel of an error picture.
+inline constexpr int kErrorPanelWidth = 800, kErrorPanelHeight = 600;
+
+// Renders the panels, `columns` to a row, each kErrorPanelWidth x kErrorPanelHeight pixels, as
 // framing_camera(frame) sees them. Each panel's surface is sampled on a grid of points at most
 // 1/200 of the frame's diagonal apart on each triangle (at most 32 x 32 cells a triangle; a
 // triangle already that small is sampled at its corners), every point coloured by its distance to
 // the nearest point of the panel's `surface` over the panels' shared scale (colours interpolated
 // between the points; `scale` > 0 fixes the top of the scale, so that pictures of several runs
 // compare, farther points drawn red). The scale's bar and its ends' values go under the panels: the
-// picture is (columns x panel_width) x (rows x panel_height + 48) pixels. Memory: one panel's
-// samples at a time, about 70 bytes each, and 4 bytes per sample of every panel. Fails
+// picture is (columns x kErrorPanelWidth) x (rows x kErrorPanelHeight + 48) pixels. Memory: one
+// panel's samples at a time, about 70 bytes each, and 4 bytes per sample of every panel. Fails
 // (ErrorCode::unsupported) when no OpenGL context can be created.
 Result<ErrorPicture> render_error_picture(std::span<const ErrorPanel> panels, int columns, const Bounds& frame,
-                                          int panel_width, int panel_height, double scale = 0.0);
+                                          double scale = 0.0);
 
 }  // namespace octolod::cli
