@@ -37,6 +37,11 @@ struct PreparedNode {
   // resolution search, the halving order and the clustered mesh all need them
   std::vector<std::array<double, 3>> face_normal;
   double area = 0.0;
+  // Empty (prepare_node leaves it so), or per position the unit sum of the normals of its
+  // triangles (position_facings), zero where they cancel: which way the surface faces there.
+  // When set, the grid keeps the opposite facings of a cell apart (up to four sides per cell;
+  // simplify_node sets it for the step it takes again where the plain grid dropped surface).
+  std::vector<std::array<float, 3>> facing;
   std::array<double, 3> origin;   // cell centre: the local origin of the quadric arithmetic
 };
 

@@ -5,7 +5,9 @@
 // belongs to the cell containing it, every locked position is a cluster of its own. For a wanted
 // triangle count the grid is adaptive on two levels (in the spirit of Shaffer & Garland 2001,
 // "Efficient adaptive simplification of massive meshes"): the cells whose quadric error per area
-// is highest are halved. wedges.cpp turns the clustering into the mesh.
+// is highest are halved. With PreparedNode::facing set, a cell holding opposite facings (both
+// sides of a thin part) is split into up to four sides, by facing. wedges.cpp turns the
+// clustering into the mesh.
 #include <algorithm>
 #include <cmath>
 #include <numeric>
@@ -23,6 +25,18 @@ namespace {
 
 constexpr std::uint64_t kLockedKey = 1ull << 63;
 constexpr std::uint64_t kFineKey = 1ull << 62;  // a cell of the halved grid (adaptive clustering)
+// The vertices of a cell that face away from its principal facing, and from its second axis
+// (split_opposite_facings).
+constexpr std::uint64_t kAwayKey = 1ull << 61;
+constexpr std::uint64_t kAcrossKey = 1ull << 60;
+constexpr std::uint64_t kCellBits = ~(kFineKey | kAwayKey | kAcrossKey);  // the cell index of an unlocked key
+// A cell holds opposite facings, the two sides of a wall or a thin box, when the vertices'
+// facings (PreparedNode::facing) sum to less than this share of their number (a 90-degree edge
+// sums to 0.71 of it): one cluster would fold both sides into one sheet.
+constexpr double kOppositeFacingShare = 0.3;
+// A split cell is split across its second axis too where the facings' moment along it is at
+// least this share of the moment along the principal one.
+constexpr double kSecondAxisShare = 0.3;
 // Adaptive grid: the coarse level alone keeps about this share of the wanted triangles (its
 // resolution is searched for that count), halving the worst cells spends the rest. A 1M rock's
 // 10/3/1% cuts, RMS / reference at the same count: uniform grid 1.61/1.56/1.23, shares 0.72,
@@ -90,7 +104,96 @@ GridDomain halved(const GridDomain& coarse) {
   return fine;
 }
 
-// Cluster key of every vertex: the linear cell index, or kLockedKey | position id.
+// In every cell that holds opposite facings (PreparedNode::facing: they nearly cancel, by
+// kOppositeFacingShare, or some vertex faces more than 120 degrees away from the cell's net
+// facing), the vertices are sorted into sides by the eigenvectors of the sum of f f^T over their
+// facings f: kAwayKey for those facing away from the principal one, and where the facings spread
+// across a second axis too (kSecondAxisShare: a tube's ring, a box) kAcrossKey for those facing
+// away from it. Each side is a cluster of its own, so both sides of a part thinner than a cell
+// stay apart, and a tube keeps four sides instead of folding into a flat ribbon. `keys` are
+// cell indices of `grid` (or locked).
+void split_opposite_facings(const PreparedNode& node, const GridDomain& grid, std::vector<std::uint64_t>& keys) {
+  constexpr std::uint32_t kNone = FlatHashMap<2>::kMissing;
+  // dense cell ids in order of first use: straight from the cell index where the grid has no
+  // more cells than vertices (the coarse grids, where cells hold both sides), else hashed
+  const std::uint64_t grid_cells = std::uint64_t{grid.dims[0]} * grid.dims[1] * grid.dims[2];
+  const bool direct = grid_cells <= keys.size();
+  std::vector<std::uint32_t> id_of_cell(direct ? grid_cells : 0, kNone);
+  std::optional<FlatHashMap<2>> table;
+  if (!direct) table.emplace(keys.size());
+  struct Cell {
+    std::array<double, 3> sum{};
+    std::uint32_t count = 0;
+    std::uint32_t first = 0;  // its first vertex
+  };
+  std::vector<Cell> cells;
+  std::vector<std::uint32_t> cell_of(keys.size(), kNone);
+  for (std::size_t v = 0; v < keys.size(); ++v) {
+    if (keys[v] & kLockedKey) continue;
+    std::uint32_t c = kNone;
+    if (direct) {
+      std::uint32_t& id = id_of_cell[keys[v]];
+      if (id == kNone) id = static_cast<std::uint32_t>(cells.size());
+      c = id;
+    } else {
+      bool inserted = false;
+      c = table->find_or_insert({static_cast<std::uint32_t>(keys[v] >> 32), static_cast<std::uint32_t>(keys[v])},
+                                static_cast<std::uint32_t>(cells.size()), inserted);
+    }
+    if (c == cells.size()) cells.push_back({{}, 0, static_cast<std::uint32_t>(v)});
+    const std::array<float, 3>& f = node.facing[node.positions.of_vertex[v]];
+    Cell& cell = cells[c];
+    for (std::size_t i = 0; i < 3; ++i) cell.sum[i] += f[i];
+    ++cell.count;
+    cell_of[v] = c;
+  }
+  // the least facing along each cell's net facing: a cell is split where some vertex faces
+  // more than 120 degrees away from it, or where the facings nearly cancel
+  std::vector<double> least(cells.size(), 0.0);
+  for (std::size_t v = 0; v < keys.size(); ++v) {
+    if (cell_of[v] == kNone) continue;
+    const std::array<double, 3>& sum = cells[cell_of[v]].sum;
+    const std::array<float, 3>& f = node.facing[node.positions.of_vertex[v]];
+    least[cell_of[v]] = std::min(least[cell_of[v]], f[0] * sum[0] + f[1] * sum[1] + f[2] * sum[2]);
+  }
+  // the cells to split, numbered; the moments of their facings (xx, xy, xz, yy, yz, zz)
+  std::vector<std::uint32_t> split_of(cells.size(), kNone);
+  std::vector<std::array<double, 6>> moment;
+  for (std::size_t c = 0; c < cells.size(); ++c) {
+    const Cell& cell = cells[c];
+    const double net = std::sqrt(cell.sum[0] * cell.sum[0] + cell.sum[1] * cell.sum[1] + cell.sum[2] * cell.sum[2]);
+    if (cell.count >= 2 && (net < kOppositeFacingShare * cell.count || least[c] < -0.5 * net)) {
+      split_of[c] = static_cast<std::uint32_t>(moment.size());
+      moment.push_back({});
+    }
+  }
+  if (moment.empty()) return;
+  for (std::size_t v = 0; v < keys.size(); ++v) {
+    if (cell_of[v] == kNone || split_of[cell_of[v]] == kNone) continue;
+    const std::array<float, 3>& f = node.facing[node.positions.of_vertex[v]];
+    std::array<double, 6>& m = moment[split_of[cell_of[v]]];
+    m[0] += f[0] * f[0], m[1] += f[0] * f[1], m[2] += f[0] * f[2];
+    m[3] += f[1] * f[1], m[4] += f[1] * f[2], m[5] += f[2] * f[2];
+  }
+  // per split cell its principal facing, and a second axis where the facings spread across
+  // it too (a tube's ring: four sides), else zero
+  std::vector<std::array<std::array<double, 3>, 2>> axes(moment.size());
+  for (std::size_t k = 0; k < moment.size(); ++k) {
+    const Eigen3 eigen = symmetric_eigen3(moment[k]);
+    axes[k][0] = eigen.vector[0];
+    axes[k][1] = eigen.value[1] >= kSecondAxisShare * eigen.value[0] ? eigen.vector[1] : std::array<double, 3>{};
+  }
+  for (std::size_t v = 0; v < keys.size(); ++v) {
+    if (cell_of[v] == kNone || split_of[cell_of[v]] == kNone) continue;
+    const std::array<std::array<double, 3>, 2>& a = axes[split_of[cell_of[v]]];
+    const std::array<float, 3>& f = node.facing[node.positions.of_vertex[v]];
+    if (a[0][0] * f[0] + a[0][1] * f[1] + a[0][2] * f[2] < 0.0) keys[v] |= kAwayKey;
+    if (a[1][0] * f[0] + a[1][1] * f[1] + a[1][2] * f[2] < 0.0) keys[v] |= kAcrossKey;
+  }
+}
+
+// Cluster key of every vertex: the linear cell index (with kAwayKey where the cell is split by
+// facing), or kLockedKey | position id.
 std::vector<std::uint64_t> vertex_keys(const PreparedNode& node, const GridDomain& grid) {
   const std::size_t stride = node.mesh().layout.floats();
   const GridCellKeys cell_keys(grid, node.origin);
@@ -100,6 +203,7 @@ std::vector<std::uint64_t> vertex_keys(const PreparedNode& node, const GridDomai
     keys[v] = node.boundary.locked_position[position] ? kLockedKey | position
                                                       : cell_keys.key(&node.mesh().vertices[v * stride]);
   }
+  if (!node.facing.empty()) split_opposite_facings(node, grid, keys);
   return keys;
 }
 
@@ -185,7 +289,7 @@ Clustering clustering_from_keys(const std::vector<std::uint64_t>& keys, const Gr
     const std::uint64_t key = distinct[c];
     clustering.locked[c] = (key & kLockedKey) != 0;
     if (clustering.locked[c]) continue;
-    clustering.box[c] = grid_cell_box(key & kFineKey ? fine : coarse, key & ~kFineKey);
+    clustering.box[c] = grid_cell_box(key & kFineKey ? fine : coarse, key & kCellBits);
   }
   return clustering;
 }

@@ -174,6 +174,25 @@ void solve_nearest(int m, Matrix& mat, const double* rhs, const double* x0, doub
 
 }  // namespace
 
+Eigen3 symmetric_eigen3(const std::array<double, 6>& upper) {
+  constexpr int s = kMaxQuadricDim;
+  Matrix a{};
+  const int index[3][3] = {{0, 1, 2}, {1, 3, 4}, {2, 4, 5}};
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) a[static_cast<std::size_t>(i * s + j)] = upper[static_cast<std::size_t>(index[i][j])];
+  Vector values{};
+  Matrix vectors{};
+  symmetric_eigen(3, a, values, vectors);
+  std::array<int, 3> order = {0, 1, 2};
+  std::stable_sort(order.begin(), order.end(), [&values](int x, int y) { return values[x] > values[y]; });
+  Eigen3 eigen{};
+  for (std::size_t k = 0; k < 3; ++k) {
+    eigen.value[k] = values[static_cast<std::size_t>(order[k])];
+    for (std::size_t i = 0; i < 3; ++i) eigen.vector[k][i] = vectors[i * s + static_cast<std::size_t>(order[k])];
+  }
+  return eigen;
+}
+
 namespace {
 
 // The orthonormal basis (e1, e2) of the plane of the triangle (p, q, r) in R^n (quadric.h);

@@ -14,6 +14,7 @@
 // row (n(n+1)/2), then b (n), then c. Sums are plain element-wise additions.
 #pragma once
 
+#include <array>
 #include <cstddef>
 
 namespace octolod::bake {
@@ -45,6 +46,15 @@ inline void add_quadric(int n, double* acc, const double* q) {
 
 // Q(v) = v^T A v + 2 b^T v + c.
 double evaluate_quadric(int n, const double* q, const double* v);
+
+// The eigen-decomposition of a symmetric 3 x 3 matrix given by its upper triangle (xx, xy, xz,
+// yy, yz, zz): eigenvalues from the largest down, each with its unit eigenvector. Deterministic
+// (cyclic Jacobi); equal eigenvalues in the order the sweeps leave them.
+struct Eigen3 {
+  std::array<double, 3> value;
+  std::array<std::array<double, 3>, 3> vector;
+};
+Eigen3 symmetric_eigen3(const std::array<double, 6>& upper);
 
 // Relative eigenvalue threshold of the pseudo-inverse: eigen-directions of A whose eigenvalue is
 // below this fraction of the largest are treated as unconstrained (Lindstrom 2000 uses 1e-3 for

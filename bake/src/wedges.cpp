@@ -211,6 +211,23 @@ double surface_area(std::span<const std::array<double, 3>> face_normal) {
   return area;
 }
 
+std::vector<std::array<float, 3>> position_facings(const NodeMesh& mesh, const PositionIds& positions,
+                                                   std::span<const std::array<double, 3>> face_normal) {
+  std::vector<std::array<double, 3>> sum(positions.count, {0.0, 0.0, 0.0});
+  for (std::size_t t = 0; t < face_normal.size(); ++t)
+    for (std::size_t k = 0; k < 3; ++k) {
+      std::array<double, 3>& s = sum[positions.of_vertex[mesh.indices[3 * t + k]]];
+      for (std::size_t i = 0; i < 3; ++i) s[i] += face_normal[t][i];
+    }
+  std::vector<std::array<float, 3>> facing(sum.size(), {0.0f, 0.0f, 0.0f});
+  for (std::size_t p = 0; p < sum.size(); ++p) {
+    const double length = std::sqrt(sum[p][0] * sum[p][0] + sum[p][1] * sum[p][1] + sum[p][2] * sum[p][2]);
+    if (length > 0.0)
+      for (std::size_t i = 0; i < 3; ++i) facing[p][i] = static_cast<float>(sum[p][i] / length);
+  }
+  return facing;
+}
+
 bool orient_kept_triangle(const std::array<const float*, 3>& record, bool even,
                           const std::array<double, 3>& source_normal, std::array<std::uint32_t, 3>& corner) {
   if (std::memcmp(record[0], record[1], 12) == 0 || std::memcmp(record[1], record[2], 12) == 0 ||

@@ -128,6 +128,11 @@ std::vector<std::array<double, 3>> face_normals(const NodeMesh& mesh);
 // The area of the triangles whose face_normals these are.
 double surface_area(std::span<const std::array<double, 3>> face_normal);
 
+// Per position, the unit sum of the face_normals (area-weighted normals) of the triangles
+// using it; zero where they cancel or the triangles are degenerate.
+std::vector<std::array<float, 3>> position_facings(const NodeMesh& mesh, const PositionIds& positions,
+                                                   std::span<const std::array<double, 3>> face_normal);
+
 // The mod-2 output rule's orientation (build_clustered_mesh): a source triangle whose corners
 // fall in the distinct clusters (c0, c1, c2) winds like their sorted triple iff (c0, c1, c2)
 // is an even permutation of it.
