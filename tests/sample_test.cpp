@@ -1,6 +1,7 @@
 // octolod::samplegen and `octolod sample`: exact counts, determinism, and the topology each shape
 // promises (closed rock with a real uv seam, closed city boxes, open terrain with a rectangular
-// boundary), attribute ranges, and a PLY round trip through the writer, the reader and the CLI.
+// boundary, closed tube on its centre circle with seams in u and v), attribute ranges, and a PLY
+// round trip through the writer, the reader and the CLI.
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -148,7 +149,7 @@ std::uint64_t fnv1a(const Mesh& mesh) {
   return h;
 }
 
-constexpr Shape kShapes[] = {Shape::rock, Shape::terrain, Shape::city};
+constexpr Shape kShapes[] = {Shape::rock, Shape::terrain, Shape::city, Shape::tube};
 
 TEST(SampleCounts, DeclaredCountsAreEmittedForEveryShapeSizeAndLayout) {
   for (Shape shape : kShapes)
@@ -173,6 +174,8 @@ TEST(SampleCounts, TriangleCountIsWithinOnePercentAtEveryScale) {
     for (std::uint64_t n : {std::uint64_t{100}, std::uint64_t{101}, std::uint64_t{1'000},
                             std::uint64_t{77'777}, std::uint64_t{1'000'000},
                             std::uint64_t{12'345'678}, std::uint64_t{100'000'000}, kMaxTriangles}) {
+      // The tube is within 8 triangles below 40K: 1% only from 800 up (its own test below).
+      if (shape == Shape::tube && n < 800) continue;
       const Result<SampleCounts> counts = sample_counts(spec_of(shape, n));
       ASSERT_TRUE(counts.ok());
       const double relative =
@@ -203,6 +206,33 @@ TEST(SampleCounts, TerrainIsWithinThreePercentFromAHundredAndOnePercentFromAThou
   }
 }
 
+TEST(SampleCounts, TubeIsWithinOneSegmentsWorthOfTriangles) {
+  // 2 * segments * rings with rings rounded: off by at most `segments` triangles, 8 below 40K.
+  for (std::uint64_t n = kMinTriangles; n < 40'000; ++n) {
+    const Result<SampleCounts> counts = sample_counts(spec_of(Shape::tube, n));
+    ASSERT_TRUE(counts.ok());
+    const std::uint64_t made = counts->triangles;
+    ASSERT_LE(made > n ? made - n : n - made, n < 18 ? 2u : 8u) << "N=" << n << " made " << made;
+    if (n >= 800) {
+      ASSERT_LE(std::fabs(static_cast<double>(made) - static_cast<double>(n)),
+                0.01 * static_cast<double>(n))
+          << "N=" << n << " made " << made;
+    }
+  }
+  EXPECT_EQ(sample_counts(spec_of(Shape::tube, 16))->triangles, 18u) << "3 segments x 3 rings";
+  for (std::uint64_t n : {std::uint64_t{40'000}, std::uint64_t{64'000}, std::uint64_t{77'777},
+                          std::uint64_t{1'000'000}, std::uint64_t{12'345'678}, kMaxTriangles}) {
+    const Result<SampleCounts> counts = sample_counts(spec_of(Shape::tube, n));
+    ASSERT_TRUE(counts.ok());
+    EXPECT_LE(std::fabs(static_cast<double>(counts->triangles) - static_cast<double>(n)),
+              3e-4 * static_cast<double>(n))
+        << "N=" << n << " made " << counts->triangles;
+    EXPECT_LT(counts->vertices, std::uint64_t{1} << 32);
+  }
+  // The facing-split benchmark's tube: 10 segments x 3,200 rings, (3,201 x 11 vertices).
+  EXPECT_EQ(sample_counts(spec_of(Shape::tube, 64'000)).value(), (SampleCounts{35'211, 64'000}));
+}
+
 TEST(SampleCounts, OutOfRangeTargetsAreUsageErrors) {
   for (std::uint64_t n : {std::uint64_t{0}, kMinTriangles - 1, kMaxTriangles + 1}) {
     const Result<SampleCounts> counts = sample_counts(spec_of(Shape::rock, n));
@@ -228,6 +258,7 @@ TEST(SampleDeterminism, PinnedChecksumsSameOnEveryPlatform) {
   EXPECT_EQ(fnv1a(generate(spec_of(Shape::rock, 1000, kAll, 1))), 16370689929761296235u);
   EXPECT_EQ(fnv1a(generate(spec_of(Shape::terrain, 1000, kAll, 1))), 16028795320873989745u);
   EXPECT_EQ(fnv1a(generate(spec_of(Shape::city, 1000, kAll, 1))), 13755169068196887386u);
+  EXPECT_EQ(fnv1a(generate(spec_of(Shape::tube, 1000, kAll, 1))), 10283928412738255103u);
 }
 
 TEST(SampleDeterminism, DifferentSeedDifferentMeshSameCounts) {
@@ -405,6 +436,141 @@ TEST(SampleTerrain, NormalsAgreeWithTheSurface) {
   EXPECT_GT(close, mesh.triangle_count() * 9 / 10);
 }
 
+// The tube's centre circle: radius 1000 / 2pi in the plane y = 0, around the origin.
+constexpr double kTubeCentreRadius = 1000.0 / (2.0 * 3.14159265358979323846);
+constexpr double kTubeRadius = 0.5;
+
+// The point of the tube's centre circle nearest to p (p off the y axis).
+std::array<double, 3> nearest_on_centre_circle(const float* p) {
+  const double from_axis = std::sqrt(double(p[0]) * p[0] + double(p[2]) * p[2]);
+  return {p[0] * kTubeCentreRadius / from_axis, 0.0, p[2] * kTubeCentreRadius / from_axis};
+}
+
+TEST(SampleTube, IsClosedManifoldOrientedOutwardByPosition) {
+  for (std::uint64_t n : {16u, 100u, 2000u, 50000u}) {
+    SCOPED_TRACE("N=" + std::to_string(n));
+    const Mesh mesh = generate(spec_of(Shape::tube, n));
+    const std::vector<std::size_t> ids = position_ids(mesh);
+    // Every edge, by position, used exactly twice: once each way.
+    expect_closed_oriented(directed_edges(mesh, ids, 0, mesh.triangle_count()));
+    // Inscribed in the torus (volume 2 pi^2 R r^2 = 250 pi): below it, and positive (outward).
+    const double volume = signed_volume(mesh);
+    EXPECT_GT(volume, 0.0) << "triangles must be counter-clockwise seen from outside";
+    EXPECT_LT(volume, 250.0 * 3.14159265358979323846);
+    // Euler characteristic of a torus, counting positions (the seam copies are one point).
+    const std::set<std::size_t> points(ids.begin(), ids.end());
+    const std::size_t edges = mesh.triangle_count() * 3 / 2;
+    EXPECT_EQ(static_cast<long>(points.size()) - static_cast<long>(edges) +
+                  static_cast<long>(mesh.triangle_count()),
+              0);
+  }
+}
+
+TEST(SampleTube, VerticesLieHalfAUnitFromTheCentreCircleWithRadialNormals) {
+  for (std::uint64_t n : {16u, 1000u, 64000u}) {
+    SCOPED_TRACE("N=" + std::to_string(n));
+    const Mesh mesh = generate(spec_of(Shape::tube, n));
+    for (std::size_t i = 0; i < mesh.vertex_count(); ++i) {
+      const float* p = mesh.vertex(i);
+      const std::array<double, 3> c = nearest_on_centre_circle(p);
+      const double d[3] = {p[0] - c[0], p[1] - c[1], p[2] - c[2]};
+      const double distance = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+      ASSERT_NEAR(distance, kTubeRadius, 1e-4) << "vertex " << i;
+      for (int k = 0; k < 3; ++k)
+        ASSERT_NEAR(mesh.normal(i)[k], d[k] / distance, 1e-4) << "vertex " << i << " axis " << k;
+    }
+  }
+}
+
+TEST(SampleTube, NormalsAgreeWithTheWinding) {
+  // Every triangle's geometric normal on the same side as each of its corners' normals, down
+  // to the 3 x 3 prism ring at N = 16 whose triangles span a third of the circle.
+  for (std::uint64_t n : {16u, 100u, 2000u, 64000u}) {
+    SCOPED_TRACE("N=" + std::to_string(n));
+    const Mesh mesh = generate(spec_of(Shape::tube, n));
+    for (std::size_t t = 0; t < mesh.triangle_count(); ++t) {
+      const std::array<double, 3> fn = face_normal(mesh, t);
+      for (std::size_t c = 0; c < 3; ++c) {
+        const float* vn = mesh.normal(mesh.triangles[3 * t + c]);
+        ASSERT_GT(fn[0] * vn[0] + fn[1] * vn[1] + fn[2] * vn[2], 0.0) << "triangle " << t;
+      }
+    }
+  }
+}
+
+TEST(SampleTube, OnlyRepeatedPositionsAreSeamCopiesAFullRepeatApartInUv) {
+  // (rings + 1) x (segments + 1) vertices over rings x segments points: ring `rings` repeats
+  // ring 0 with u = 100 for 0, segment `segments` repeats segment 0 with v = 1 for 0.
+  const Mesh mesh = generate(spec_of(Shape::tube, 5000));
+  std::map<Position, std::vector<std::size_t>> by_position;
+  for (std::size_t i = 0; i < mesh.vertex_count(); ++i)
+    by_position[position_of(mesh, i)].push_back(i);
+  for (const auto& [position, copies] : by_position) {
+    ASSERT_LE(copies.size(), 4u);
+    for (std::size_t copy : copies) {
+      for (int k = 0; k < 3; ++k) {
+        EXPECT_EQ(mesh.normal(copy)[k], mesh.normal(copies[0])[k]) << "copies differ only in uv";
+        EXPECT_EQ(mesh.color(copy)[k], mesh.color(copies[0])[k]);
+      }
+      for (int k = 0; k < 2; ++k) {
+        const float difference = std::fabs(mesh.uv(copy)[k] - mesh.uv(copies[0])[k]);
+        EXPECT_TRUE(difference == 0.0f || difference == (k == 0 ? 100.0f : 1.0f))
+            << "uv " << k << " of copies " << copies[0] << ", " << copy;
+      }
+    }
+  }
+  const std::size_t points = by_position.size();
+  // points = rings x segments; vertices = (rings + 1) x (segments + 1).
+  bool grid_found = false;
+  for (std::size_t segments = 3; segments * 3 <= points; ++segments)
+    if (points % segments == 0 &&
+        (points / segments + 1) * (segments + 1) == mesh.vertex_count() &&
+        2 * points == mesh.triangle_count())
+      grid_found = true;
+  EXPECT_TRUE(grid_found) << points << " points, " << mesh.vertex_count() << " vertices";
+  // No triangle straddles a seam: each spans a sliver of u's 0..100 and v's 0..1.
+  for (std::size_t t = 0; t < mesh.triangle_count(); ++t)
+    for (int k = 0; k < 2; ++k) {
+      float lo = 1e30f, hi = -1e30f;
+      for (std::size_t c = 0; c < 3; ++c) {
+        lo = std::min(lo, mesh.uv(mesh.triangles[3 * t + c])[k]);
+        hi = std::max(hi, mesh.uv(mesh.triangles[3 * t + c])[k]);
+      }
+      ASSERT_LT(hi - lo, k == 0 ? 50.0f : 0.5f) << "triangle " << t;
+    }
+}
+
+TEST(SampleTube, BenchmarkTubeHasAboutSquareQuads) {
+  // At 64K: 10 segments (0.31 around) x 3,200 rings (0.31 along): sides within 1.5x of each
+  // other, the diagonals sqrt 2 longer, so every edge within 2.5x of every other.
+  const Mesh mesh = generate(spec_of(Shape::tube, 64000, kNone));
+  double shortest = 1e30, longest = 0;
+  for (std::size_t t = 0; t < mesh.triangle_count(); ++t)
+    for (std::size_t c = 0; c < 3; ++c) {
+      const float* p = mesh.vertex(mesh.triangles[3 * t + c]);
+      const float* q = mesh.vertex(mesh.triangles[3 * t + (c + 1) % 3]);
+      const double dx = double(q[0]) - p[0], dy = double(q[1]) - p[1], dz = double(q[2]) - p[2];
+      const double length = std::sqrt(dx * dx + dy * dy + dz * dz);
+      shortest = std::min(shortest, length), longest = std::max(longest, length);
+    }
+  EXPECT_LT(longest, 2.5 * shortest) << shortest << " .. " << longest;
+}
+
+TEST(SampleTube, SeedChangesOnlyTheColour) {
+  const Mesh a = generate(spec_of(Shape::tube, 3000, kAll, 1));
+  const Mesh b = generate(spec_of(Shape::tube, 3000, kAll, 2));
+  ASSERT_EQ(a.vertices.size(), b.vertices.size());
+  EXPECT_EQ(a.triangles, b.triangles);
+  bool colour_differs = false;
+  for (std::size_t i = 0; i < a.vertex_count(); ++i) {
+    for (std::uint32_t k = 0; k < 3; ++k) ASSERT_EQ(a.vertex(i)[k], b.vertex(i)[k]);
+    for (std::uint32_t k = 0; k < 3; ++k) ASSERT_EQ(a.normal(i)[k], b.normal(i)[k]);
+    for (std::uint32_t k = 0; k < 2; ++k) ASSERT_EQ(a.uv(i)[k], b.uv(i)[k]);
+    for (std::uint32_t k = 0; k < 3; ++k) colour_differs |= a.color(i)[k] != b.color(i)[k];
+  }
+  EXPECT_TRUE(colour_differs);
+}
+
 TEST(SampleAttributes, TrianglesNonDegenerateNormalsUnitColoursInRange) {
   for (Shape shape : kShapes)
     for (std::uint64_t n : {16u, 500u, 40000u}) {
@@ -466,7 +632,20 @@ TEST(SampleParse, AttributesAndShapes) {
   for (const char* bad : {"normals", "normal,", ",uv", "normal,,uv", "position"})
     EXPECT_FALSE(parse_attributes(bad).ok()) << bad;
   EXPECT_EQ(parse_shape("terrain").value(), Shape::terrain);
+  EXPECT_EQ(parse_shape("tube").value(), Shape::tube);
   EXPECT_FALSE(parse_shape("Rock").ok());
+}
+
+TEST(SampleParse, EveryShapeRoundTripsAndTheUnknownShapeErrorListsThemAll) {
+  const Result<Shape> unknown = parse_shape("moon");
+  ASSERT_FALSE(unknown.ok());
+  EXPECT_EQ(unknown.status().code(), ErrorCode::usage);
+  EXPECT_NE(unknown.status().message().find("'moon'"), std::string::npos);
+  for (Shape shape : kShapes) {
+    EXPECT_EQ(parse_shape(to_string(shape)).value(), shape);
+    EXPECT_NE(unknown.status().message().find(to_string(shape)), std::string::npos)
+        << to_string(shape) << " missing in: " << unknown.status().message();
+  }
 }
 
 class SampleFiles : public ::testing::Test {

@@ -1,4 +1,4 @@
-// octolod sample: writes a deterministic procedural mesh (rock, terrain, city) of about N
+// octolod sample: writes a deterministic procedural mesh (rock, terrain, city, tube) of about N
 // triangles as PLY, streaming, so any N runs in a few MB (see octolod/samplegen).
 #include <algorithm>
 #include <chrono>

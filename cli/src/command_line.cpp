@@ -226,7 +226,7 @@ void add_sample_command(CLI::App& app, CommandContext& context) {
   auto args = std::make_shared<SampleArgs>();
   CLI::App* command = app.add_subcommand(
       "sample", "Write a deterministic procedural mesh (streaming, bounded memory for any size)");
-  command->add_option("--shape", args->shape, "rock | terrain | city")->required();
+  command->add_option("--shape", args->shape, "rock | terrain | city | tube")->required();
   command
       ->add_option("--triangles", args->triangles,
                    "About this many triangles: 200000, 2e5, 200K, 20M")

@@ -30,6 +30,8 @@ std::string_view to_string(Shape shape) {
       return "terrain";
     case Shape::city:
       return "city";
+    case Shape::tube:
+      return "tube";
   }
   return "unknown";
 }
@@ -52,6 +54,8 @@ std::unique_ptr<ShapeGenerator> make_generator(const SampleSpec& spec) {
       return make_terrain(spec);
     case Shape::city:
       return make_city(spec);
+    case Shape::tube:
+      return make_tube(spec);
   }
   return make_rock(spec);
 }
@@ -272,9 +276,10 @@ Status write_sample_ply(const SampleSpec& spec, const std::filesystem::path& pat
 }
 
 Result<Shape> parse_shape(std::string_view text) {
-  for (Shape shape : {Shape::rock, Shape::terrain, Shape::city})
+  for (Shape shape : {Shape::rock, Shape::terrain, Shape::city, Shape::tube})
     if (text == to_string(shape)) return shape;
-  return usage_error("unknown shape '" + std::string(text) + "' (expected rock, terrain or city)");
+  return usage_error("unknown shape '" + std::string(text) +
+                     "' (expected rock, terrain, city or tube)");
 }
 
 Result<std::uint64_t> parse_triangle_count(std::string_view text) {

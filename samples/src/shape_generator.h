@@ -24,11 +24,12 @@ class ShapeGenerator {
 };
 
 // Construction is cheap (no generation): O(sqrt(N)) for the rock's ring table and the terrain's
-// grid search, O(1) for the city.
+// grid search, O(1) for the city and the tube.
 // spec.triangles is already within [kMinTriangles, kMaxTriangles].
 std::unique_ptr<ShapeGenerator> make_rock(const SampleSpec& spec);
 std::unique_ptr<ShapeGenerator> make_terrain(const SampleSpec& spec);
 std::unique_ptr<ShapeGenerator> make_city(const SampleSpec& spec);
+std::unique_ptr<ShapeGenerator> make_tube(const SampleSpec& spec);
 
 // Writes one vertex in VertexLayout order, skipping absent attributes; returns the next slot.
 struct VertexAttributes {

@@ -1,5 +1,6 @@
 // Procedural sample meshes for `octolod sample`, the tests and the benchmarks: a noise-displaced
-// closed rock, an open fBm terrain, a city of flat-shaded boxes. Any size from 16 to a billion
+// closed rock, an open fBm terrain, a city of flat-shaded boxes, a thin closed tube (a torus 1 unit
+// wide and 1,000 long, thinner than the bake's grid cells). Any size from 16 to a billion
 // triangles, streamed in bounded memory, bit-identical on every platform, optimization level and
 // thread count for the same SampleSpec (own integer hash noise and own sin/cos: only + - * /
 // sqrt floor, no libm transcendentals, no std::*_distribution, no fused multiply-add).
@@ -10,6 +11,8 @@
 //            never self-intersecting), then by (1, 0.72, 0.86) per axis
 //   terrain  x in [0, 100], z in [0, 100 * rows / columns], y in (-7, 21) (typically -7..14)
 //   city     12 x 12 lots on the ground plane y = 0 starting at the origin, buildings 3..60 high
+//   tube     around the origin: a centre circle in the plane y = 0 of circumference 1000 (radius
+//            1000 / 2pi ~ 159.15), tube radius 0.5: x, z in [-159.66, 159.66], y in [-0.5, 0.5]
 #pragma once
 
 #include <cstddef>
@@ -43,6 +46,14 @@ enum class Shape {
   // its own 4 vertices with the face normal (flat shading), uv in units of 10 model units per
   // face, one colour per box. Each box is closed on its own.
   city,
+  // Closed 2-manifold torus: a (rings + 1) x (segments + 1) grid of shared vertices, the last
+  // ring and the last segment the seam copies of the first (same position, normal and colour
+  // bits; u or v a full repeat on). Quads about square: segments = sqrt(N / 636.6), at least 8
+  // from 48 triangles up (N / 6 below, so that 3 rings fit: 3 at 16). uv: u = centre-line
+  // length / 10 (0..100), v = angle around / 2pi (0..1, from the outer equator). Exact normals
+  // radial from the centre circle; one paint colour picked by the seed (the only thing the seed
+  // changes) with a light band 10 long every 100.
+  tube,
 };
 
 std::string_view to_string(Shape shape);
@@ -51,7 +62,8 @@ struct SampleSpec {
   Shape shape = Shape::rock;
   // Wanted triangle count. Rock and city make exactly this many or one less (odd counts);
   // the terrain, a grid of 2 * columns * rows, is within 3% from 100 triangles up and within
-  // 1% from 1000 up.
+  // 1% from 1000 up; the tube, a grid of 2 * segments * rings, is within `segments` triangles:
+  // 8 below 40,000 (so within 1% from 800 up; 16 and 17 make 18), 0.03% from 40,000 up.
   std::uint64_t triangles = 40'000;
   VertexLayout layout{true, true, true};
   std::uint64_t seed = 1;
@@ -136,7 +148,7 @@ Result<NodeMesh> generate_sample_mesh(const SampleSpec& spec);
 
 // Command-line vocabulary, shared by `octolod sample` and the benchmarks. All return usage
 // errors that quote the text.
-// "rock" | "terrain" | "city".
+// "rock" | "terrain" | "city" | "tube".
 Result<Shape> parse_shape(std::string_view text);
 // "200000", "2e5", "200K", "20M", "1.5G" (decimal suffixes K = 1e3, M = 1e6, G = 1e9); the value
 // is rounded to an integer and must be in [kMinTriangles, kMaxTriangles].
