@@ -124,7 +124,6 @@ void split_opposite_facings(const PreparedNode& node, const GridDomain& grid, st
   struct Cell {
     std::array<double, 3> sum{};
     std::uint32_t count = 0;
-    std::uint32_t first = 0;  // its first vertex
   };
   std::vector<Cell> cells;
   std::vector<std::uint32_t> cell_of(keys.size(), kNone);
@@ -140,7 +139,7 @@ void split_opposite_facings(const PreparedNode& node, const GridDomain& grid, st
       c = table->find_or_insert({static_cast<std::uint32_t>(keys[v] >> 32), static_cast<std::uint32_t>(keys[v])},
                                 static_cast<std::uint32_t>(cells.size()), inserted);
     }
-    if (c == cells.size()) cells.push_back({{}, 0, static_cast<std::uint32_t>(v)});
+    if (c == cells.size()) cells.emplace_back();
     const std::array<float, 3>& f = node.facing[node.positions.of_vertex[v]];
     Cell& cell = cells[c];
     for (std::size_t i = 0; i < 3; ++i) cell.sum[i] += f[i];
@@ -192,8 +191,8 @@ void split_opposite_facings(const PreparedNode& node, const GridDomain& grid, st
   }
 }
 
-// Cluster key of every vertex: the linear cell index (with kAwayKey where the cell is split by
-// facing), or kLockedKey | position id.
+// Cluster key of every vertex: the linear cell index (with kAwayKey / kAcrossKey where the cell
+// is split by facing), or kLockedKey | position id.
 std::vector<std::uint64_t> vertex_keys(const PreparedNode& node, const GridDomain& grid) {
   const std::size_t stride = node.mesh().layout.floats();
   const GridCellKeys cell_keys(grid, node.origin);
