@@ -126,6 +126,17 @@ std::array<double, 3> face_normal(const Mesh& mesh, std::size_t t) {
           e1[0] * e2[1] - e1[1] * e2[0]};
 }
 
+// Every triangle's geometric normal on the same side as each of its corners' normals.
+void expect_normals_follow_the_winding(const Mesh& mesh) {
+  for (std::size_t t = 0; t < mesh.triangle_count(); ++t) {
+    const std::array<double, 3> n = face_normal(mesh, t);
+    for (std::size_t c = 0; c < 3; ++c) {
+      const float* vn = mesh.normal(mesh.triangles[3 * t + c]);
+      ASSERT_GT(n[0] * vn[0] + n[1] * vn[1] + n[2] * vn[2], 0.0) << "triangle " << t;
+    }
+  }
+}
+
 double signed_volume(const Mesh& mesh) {
   double volume = 0;
   for (std::size_t t = 0; t < mesh.triangle_count(); ++t) {
@@ -487,14 +498,7 @@ TEST(SampleTube, NormalsAgreeWithTheWinding) {
   // to the 3 x 3 prism ring at N = 16 whose triangles span a third of the circle.
   for (std::uint64_t n : {16u, 100u, 2000u, 64000u}) {
     SCOPED_TRACE("N=" + std::to_string(n));
-    const Mesh mesh = generate(spec_of(Shape::tube, n));
-    for (std::size_t t = 0; t < mesh.triangle_count(); ++t) {
-      const std::array<double, 3> fn = face_normal(mesh, t);
-      for (std::size_t c = 0; c < 3; ++c) {
-        const float* vn = mesh.normal(mesh.triangles[3 * t + c]);
-        ASSERT_GT(fn[0] * vn[0] + fn[1] * vn[1] + fn[2] * vn[2], 0.0) << "triangle " << t;
-      }
-    }
+    expect_normals_follow_the_winding(generate(spec_of(Shape::tube, n)));
   }
 }
 
@@ -597,14 +601,7 @@ TEST(SampleAttributes, TrianglesNonDegenerateNormalsUnitColoursInRange) {
 }
 
 TEST(SampleAttributes, RockVertexNormalsFaceOutwardAlongTheSurface) {
-  const Mesh mesh = generate(spec_of(Shape::rock, 50000));
-  for (std::size_t t = 0; t < mesh.triangle_count(); ++t) {
-    const std::array<double, 3> n = face_normal(mesh, t);
-    for (std::size_t c = 0; c < 3; ++c) {
-      const float* vn = mesh.normal(mesh.triangles[3 * t + c]);
-      ASSERT_GT(n[0] * vn[0] + n[1] * vn[1] + n[2] * vn[2], 0.0) << "triangle " << t;
-    }
-  }
+  expect_normals_follow_the_winding(generate(spec_of(Shape::rock, 50000)));
 }
 
 TEST(SampleParse, TriangleCountsAcceptPlainExponentAndDecimalSuffixes) {
