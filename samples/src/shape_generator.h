@@ -23,6 +23,34 @@ class ShapeGenerator {
   virtual void next_triangles(std::size_t count, std::uint32_t* out) = 0;
 };
 
+// The triangles of a grid of quads `width` wide (width + 1 vertices per row, rows one after the
+// other), two per quad, quad after quad along each row. The quad's corners: a, b = a + 1 (next
+// along the row), c = a + width + 1 (the next row), d = c + 1; `wind(second, a, b, c, d, out)`
+// writes the quad's first or second triangle to out[0..3).
+class QuadGridTriangles {
+ public:
+  explicit QuadGridTriangles(std::uint64_t width) : width_(width) {}
+  template <typename Wind>
+  void next(std::size_t count, std::uint32_t* out, Wind wind) {
+    const std::uint64_t stride = width_ + 1;
+    for (std::size_t k = 0; k < count; ++k, out += 3) {
+      const auto a = static_cast<std::uint32_t>(column_ + row_ * stride);
+      const auto c = static_cast<std::uint32_t>(a + stride);
+      wind(second_, a, a + 1, c, c + 1, out);
+      if (second_ && ++column_ == width_) {
+        column_ = 0;
+        ++row_;
+      }
+      second_ = !second_;
+    }
+  }
+
+ private:
+  std::uint64_t width_;
+  std::uint64_t column_ = 0, row_ = 0;  // quad cursor
+  bool second_ = false;                 // next triangle is the quad's second
+};
+
 // Construction is cheap (no generation): O(sqrt(N)) for the rock's ring table and the terrain's
 // grid search, O(1) for the city and the tube.
 // spec.triangles is already within [kMinTriangles, kMaxTriangles].

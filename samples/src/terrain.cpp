@@ -73,24 +73,13 @@ class TerrainGenerator final : public ShapeGenerator {
   // Quad (i, j) with corners a = (i, j), b = (i+1, j), c = (i, j+1), d = (i+1, j+1) is
   // (a, c, b), (b, c, d): counter-clockwise seen from +y.
   void next_triangles(std::size_t count, std::uint32_t* out) override {
-    const std::uint64_t stride = grid_.columns + 1;
-    for (std::size_t k = 0; k < count; ++k, out += 3) {
-      const auto a = static_cast<std::uint32_t>(ti_ + tj_ * stride);
-      const auto b = a + 1;
-      const auto c = static_cast<std::uint32_t>(a + stride);
-      const auto d = c + 1;
-      if (!second_) {
-        out[0] = a, out[1] = c, out[2] = b;
-      } else {
-        out[0] = b, out[1] = c, out[2] = d;
-        if (++ti_ == grid_.columns) {
-          ti_ = 0;
-          ++tj_;
-        }
-      }
-      second_ = !second_;
-    }
+    quads_.next(count, out, [](bool second, std::uint32_t a, std::uint32_t b, std::uint32_t c, std::uint32_t d,
+                               std::uint32_t* t) {
+      if (!second) t[0] = a, t[1] = c, t[2] = b;
+      else t[0] = b, t[1] = c, t[2] = d;
+    });
   }
+
 
  private:
   VertexAttributes vertex(std::uint64_t i, std::uint64_t j) const {
@@ -133,8 +122,7 @@ class TerrainGenerator final : public ShapeGenerator {
   Grid grid_;
   double spacing_;  // model units between grid lines, both directions
   Fbm height_;
-  std::uint64_t ti_ = 0, tj_ = 0;  // quad cursor
-  bool second_ = false;            // next triangle is the quad's second
+  QuadGridTriangles quads_{grid_.columns};
 };
 
 }  // namespace

@@ -80,24 +80,13 @@ class TubeGenerator final : public ShapeGenerator {
   // (a, b, c), (b, d, c): dp/dphi x dp/dtheta points outward, so these are counter-clockwise
   // seen from outside.
   void next_triangles(std::size_t count, std::uint32_t* out) override {
-    const std::uint64_t stride = grid_.segments + 1;
-    for (std::size_t k = 0; k < count; ++k, out += 3) {
-      const auto a = static_cast<std::uint32_t>(tj_ + ti_ * stride);
-      const auto b = a + 1;
-      const auto c = static_cast<std::uint32_t>(a + stride);
-      const auto d = c + 1;
-      if (!second_) {
-        out[0] = a, out[1] = b, out[2] = c;
-      } else {
-        out[0] = b, out[1] = d, out[2] = c;
-        if (++tj_ == grid_.segments) {
-          tj_ = 0;
-          ++ti_;
-        }
-      }
-      second_ = !second_;
-    }
+    quads_.next(count, out, [](bool second, std::uint32_t a, std::uint32_t b, std::uint32_t c, std::uint32_t d,
+                               std::uint32_t* t) {
+      if (!second) t[0] = a, t[1] = b, t[2] = c;
+      else t[0] = b, t[1] = d, t[2] = c;
+    });
   }
+
 
  private:
   VertexAttributes vertex(std::uint64_t i, const SinCos& theta, std::uint64_t j) const {
@@ -130,8 +119,7 @@ class TubeGenerator final : public ShapeGenerator {
   VertexLayout layout_;
   Grid grid_;
   double paint_[3] = {};           // the seed's colour, 0..1
-  std::uint64_t ti_ = 0, tj_ = 0;  // quad cursor: ring, segment
-  bool second_ = false;            // next triangle is the quad's second
+  QuadGridTriangles quads_{grid_.segments};  // rows are rings
 };
 
 }  // namespace
