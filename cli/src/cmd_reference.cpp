@@ -1,5 +1,5 @@
 // octolod reference: the QSlim-style baseline (Garland & Heckbert 1997) a baked LOD is compared
-// against — OpenMesh's Decimater with the quadric module and a normal-flip guard
+// against — OpenMesh's Decimater with the quadric module, a normal-flip guard and a valence limit
 // (octolod/measure/reference.h) — at a given triangle count, written as PLY.
 //
 // Exit codes: 1 usage, 2 malformed input or no triangles, 4 the input cannot be read or the

@@ -190,7 +190,7 @@ void add_reference_command(CLI::App& app, CommandContext& context) {
   auto args = std::make_shared<ReferenceArgs>();
   CLI::App* command = app.add_subcommand(
       "reference",
-      "QSlim-style reference simplification (OpenMesh Decimater, quadrics + normal-flip guard)");
+      "QSlim-style reference simplification (OpenMesh Decimater, quadrics + normal-flip guard, valence <= 16)");
   command->add_option("input", args->input, "Input mesh (.ply)")->required();
   command
       ->add_option("--triangles", args->triangles,

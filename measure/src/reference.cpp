@@ -20,6 +20,7 @@
 
 #include "mesh_check.h"
 #include "octolod/measure/triangle_bvh.h"
+#include "valence_limit.h"
 
 namespace octolod::measure {
 namespace {
@@ -86,6 +87,13 @@ std::size_t count_live_faces(const OmMesh& mesh) {
   return live;
 }
 
+// The valence no collapse may raise a vertex above (ModValenceLimitT). On the 200K rock, city
+// and terrain it never binds (their references at 1% and 3% are byte-identical without it; the
+// largest valence in them is 12); on a 32-sided open tube of 32,000 triangles it takes the
+// decimation to 1% from 104 s to 0.5 s, with a two-sided RMS of 0.012 instead of 0.021 (a limit
+// of 32: 0.9 s, RMS 0.075).
+constexpr unsigned kMaxValence = 16;
+
 // Greedy quadric-ordered half-edge collapses; lives as long as the snapshots are taken, so the
 // vertex quadrics accumulate across targets.
 class QuadricDecimation {
@@ -93,6 +101,8 @@ class QuadricDecimation {
   explicit QuadricDecimation(OmMesh& mesh) : mesh_(mesh), decimater_(mesh) {
     decimater_.add(quadric_);
     decimater_.add(normal_flipping_);
+    decimater_.add(valence_limit_);
+    decimater_.module(valence_limit_).set_max_valence(kMaxValence);
     decimater_.module(quadric_).unset_max_err();  // priority only: stop at the count, not an error
     decimater_.initialize();
   }
@@ -110,6 +120,7 @@ class QuadricDecimation {
   Decimater decimater_;
   OpenMesh::Decimater::ModQuadricT<OmMesh>::Handle quadric_;
   OpenMesh::Decimater::ModNormalFlippingT<OmMesh>::Handle normal_flipping_;
+  ModValenceLimitT<OmMesh>::Handle valence_limit_;
 };
 
 // Attributes of the input at its point closest to a position: what an output vertex carries.

@@ -1,7 +1,10 @@
 // QSlim-style reference simplification (Garland & Heckbert, "Surface simplification using quadric
 // error metrics", SIGGRAPH 1997) via OpenMesh's Decimater: the baseline a baked LOD is compared
 // against (`octolod reference`, then `octolod eval`). Greedy half-edge collapses ordered by the
-// quadric error (ModQuadricT), vetoing collapses that flip a face normal (ModNormalFlippingT).
+// quadric error (ModQuadricT), vetoing collapses that flip a face normal (ModNormalFlippingT) or
+// that raise a vertex above valence 16 (valence_limit.h: unlimited, the decimater turns cubic
+// where collapses gather hubs, as on an open tube; the limit never binds on the sample rock,
+// city or terrain).
 #pragma once
 
 #include <cstdint>
