@@ -185,6 +185,33 @@ TEST(PartBound, AnOutputWoundAtRandomTilesThePartsShadowAsWoundConsistently) {
   for (std::uint32_t t : all) EXPECT_EQ(mixed_bounder.distance2(part[1], t), consistent_bounder.distance2(part[1], t));
 }
 
+TEST(PartBound, TheNeighboursWalkFromOneCandidateToTheWholeShadow) {
+  // One grid triangle under the part's first corner: its piece ends at its sides inside the
+  // part, and the walk across them and on reaches every triangle under the part (an 8 x 8 grid:
+  // the part lies over dozens), bounding it by its height. Offered again, a piece's triangle
+  // does not count twice. With the grid's centre cut out, the walk runs out: not covered.
+  constexpr int kGrid = 8;
+  const std::vector<Triangle3d> grid = square_grid(kGrid, std::vector<bool>(2 * kGrid * kGrid, true));
+  const Triangle3d part{{{0.1, 0.1, 0.01}, {0.9, 0.2, 0.01}, {0.2, 0.9, 0.01}}};
+  const PartBounder bounder(grid);
+  const std::uint32_t under_first_corner = 0;  // the lower-right half of the quad at (0, 0)
+  ASSERT_LT(bounder.distance2(part[0], under_first_corner), 0.011 * 0.011);
+  PartBounder::Prism prism(bounder, part, 0.0);
+  EXPECT_FALSE(prism.offer(under_first_corner));
+  EXPECT_FALSE(prism.offer(under_first_corner));
+  EXPECT_TRUE(prism.offer_neighbours());
+  EXPECT_NEAR(std::sqrt(prism.bound2()), 0.01, 1e-9);
+
+  std::vector<Triangle3d> holed;
+  for (std::size_t t = 0; t < grid.size(); ++t)
+    if (t / 2 != (kGrid / 2) * kGrid + kGrid / 2) holed.push_back(grid[t]);  // without quad (4, 4)
+  const PartBounder holed_bounder(holed);
+  PartBounder::Prism around_the_hole(holed_bounder, part, 0.0);
+  EXPECT_FALSE(around_the_hole.offer(under_first_corner));
+  EXPECT_FALSE(around_the_hole.offer_neighbours());
+  EXPECT_EQ(around_the_hole.bound2(), std::numeric_limits<double>::infinity());
+}
+
 TEST(ErrorBound, AGapInTheOutputIsMeasuredAcrossIt) {
   // Only the lower-right output triangle: the input's corner above the diagonal is about 0.5
   // from it. The bound covers the gap (no piece there) and stays close to the true distance.

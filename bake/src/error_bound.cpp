@@ -16,7 +16,8 @@
 // Only triangles whose cheap single-candidate bound exceeds the total so far get the prism
 // pieces, and only those the pieces do not cover get the split, worst first: the total is a max.
 // Candidates come from the clustering's hints (error_bound.h, ImageHints): the triangle's image
-// and each corner's nearest image first, then the fans around its corners' clusters. The version
+// and each corner's nearest image first, then the output triangles across the sides where the
+// pieces end inside the triangle, then the fans around its corners' clusters. The version
 // without hints takes every corner's nearest triangle by query.
 #include "error_bound.h"
 
@@ -206,10 +207,9 @@ double hausdorff_upper_bound(const NodeMesh& input, const NodeMesh& output, cons
     return std::span<const std::uint32_t>(own.data(), own[distinct - 1] == kNoTriangle ? distinct - 1 : distinct);
   };
   // A triangle's candidates for the prism pieces: `few` (its image and its corners' nearest
-  // triangles, which cover most triangles that straddle an output edge), then the fans around its
-  // corners' clusters (which cover most of the others: a part whose shadow falls beyond its
-  // corners' nearest triangles). One prism over them all: half the triangles that needed one
-  // were not covered by the few alone, and a second prism over the fans repeated the first.
+  // triangles, which cover half the triangles that need a prism), then the fans around its
+  // corners' clusters (for the prisms the walk across the pieces' sides, below, leaves open).
+  // One prism over them all: a second prism over the fans repeated the first.
   std::vector<std::uint32_t> candidates;
   std::vector<std::uint32_t> added_in(output.triangle_count(), 0);  // the gathering that added it
   std::uint32_t gathering = 0;
@@ -261,11 +261,14 @@ double hausdorff_upper_bound(const NodeMesh& input, const NodeMesh& output, cons
       if (all.empty()) all = gather(static_cast<std::uint32_t>(t), few);
       return all;
     };
+    // The prism over the few, then over the output triangles across its pieces' open sides (on
+    // a 1M rock they settle 97% of the prisms the few do not, where the fans took 5 offers
+    // each), then the fans.
     PartBounder::Prism prism(bounder, p, total2);
     auto offer_each = [&](std::span<const std::uint32_t> list) {
       return std::any_of(list.begin(), list.end(), [&](std::uint32_t candidate) { return prism.offer(candidate); });
     };
-    if (!offer_each(few)) offer_each(gathered().subspan(few.size()));
+    if (!offer_each(few) && !prism.offer_neighbours()) offer_each(gathered().subspan(few.size()));
     const double prism2 = prism.bound2();
     if (prism2 == kInfinity) pending.push_back({best2, static_cast<std::uint32_t>(t)});
     else if (std::min(prism2, best2) > total2)

@@ -307,6 +307,12 @@ PartBounder::Prism::Prism(const PartBounder& bounder, const Triangle3d& part, do
 
 bool PartBounder::Prism::offer(std::uint32_t candidate) {
   if (settled_) return true;
+  // offered before: only a piece or a candidate facing away is remembered (the others are
+  // passed over again as they were)
+  const std::span<const std::uint32_t> pieces(piece_triangle_, piece_count_), away(facing_away_, facing_away_count_);
+  if (std::find(pieces.begin(), pieces.end(), candidate) != pieces.end() ||
+      std::find(away.begin(), away.end(), candidate) != away.end())
+    return false;
   const Sphere& sphere = bounder_.sphere_[candidate];
   const Vec3d apart = sub(sphere.center, middle_);
   const double across2 = dot(apart, apart) - dot(apart, unit_) * dot(apart, unit_);
@@ -390,6 +396,17 @@ bool PartBounder::Prism::offer(std::uint32_t candidate) {
   settled_ = true;
   covers_ = closed();
   return true;
+}
+
+bool PartBounder::Prism::offer_neighbours() {
+  // piece_count_ grows as the pieces are offered: their own open sides are walked in turn
+  for (std::size_t i = 0; i < piece_count_ && !settled_; ++i)
+    for (std::size_t e = 0; e < 3; ++e)
+      if ((piece_open_[i] & (1u << e)) != 0) {
+        const std::uint32_t across = bounder_.across_[piece_triangle_[i]][e];
+        if (across != kNoTriangle && offer(across)) return true;
+      }
+  return settled_;
 }
 
 // The areas alone could add up with an overlap (a fold) cancelling a gap. Every piece side along

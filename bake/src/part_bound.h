@@ -71,8 +71,13 @@ class PartBounder {
     Prism(const PartBounder& bounder, const Triangle3d& part, double enough2);
     // Cuts the candidate's piece from the part. True once the outcome is known: the pieces
     // cover the part (further candidates could only overlap), or never will (their areas add up
-    // without the proof of cover, a degenerate part, too many pieces).
+    // without the proof of cover, a degenerate part, too many pieces). A candidate offered
+    // before is passed over.
     bool offer(std::uint32_t candidate);
+    // Offers the output triangles across the prism sides where the pieces end inside the part,
+    // and across theirs, until the outcome is known (true) or there are none left: the
+    // candidates a part straddling output edges needs, without the fans around its corners.
+    bool offer_neighbours();
     // The bound of the pieces once they cover the part; else, when the candidates offered that
     // face away from it cover it wound the other way, theirs; +infinity when neither does.
     double bound2() const;
