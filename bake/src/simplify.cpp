@@ -83,20 +83,25 @@ PreparedNode prepare_node(const NodeMesh& mesh, const Bounds& cell, bool lock_bo
     node.cleaned = std::move(once);
     node.positions = make_position_ids(node.mesh());
   }
-  if (lock_boundary) {
-    node.boundary = find_boundary(node.mesh(), node.positions, cell, neighbours);
-    node.free_border = std::move(node.boundary.free_edges);
-  } else {
-    node.free_border = find_boundary(node.mesh(), node.positions).edges;
-    node.boundary.locked_position.assign(node.positions.count, 0);
-  }
   node.cell = cell;
+  prepare_boundary(node, lock_boundary, neighbours);
   node.mesh_bounds = node.mesh().bounds();
   node.face_normal = face_normals(node.mesh());
   node.area = surface_area(node.face_normal);
   for (std::size_t i = 0; i < 3; ++i)
     node.origin[i] = 0.5 * (static_cast<double>(cell.min[i]) + static_cast<double>(cell.max[i]));
   return node;
+}
+
+void prepare_boundary(PreparedNode& node, bool lock_boundary, const NeighbourReach& neighbours) {
+  if (lock_boundary) {
+    node.boundary = find_boundary(node.mesh(), node.positions, node.cell, neighbours);
+    node.free_border = std::move(node.boundary.free_edges);
+  } else {
+    node.boundary = {};
+    node.free_border = find_boundary(node.mesh(), node.positions).edges;
+    node.boundary.locked_position.assign(node.positions.count, 0);
+  }
 }
 
 Result<SimplifyResult> simplify_node(const NodeMesh& input, const Bounds& cell,
@@ -136,13 +141,16 @@ Result<SimplifyResult> simplify_node(const NodeMesh& input, const Bounds& cell,
   // hold opposite facings split (PreparedNode::facing: both sides of a part thinner than a
   // cell), kept when it has the lower error within the target (both are within it: the chain
   // goes on from either; a collapsed part has the fewer triangles and the larger error).
+  // (the facings do not depend on the boundary: computed once for either border)
+  std::vector<std::array<float, 3>> facings;
   auto best_grid_step = [&](PreparedNode& node, double max_cost) {
     SimplifyResult plain = grid_step(node, max_cost, kInfinity);
     if (options.target_triangles == 0 || surface_area(face_normals(plain.mesh)) >= kSplitAreaShare * node.area)
       return plain;
-    node.facing = position_facings(node.mesh(), node.positions, node.face_normal);
+    if (facings.empty()) facings = position_facings(node.mesh(), node.positions, node.face_normal);
+    node.facing.swap(facings);
     SimplifyResult split = grid_step(node, max_cost, plain.error_bound);
-    node.facing.clear();
+    node.facing.swap(facings);
     const bool wins = split.mesh.triangle_count() <= options.target_triangles && split.error_bound < plain.error_bound;
     return wins ? split : plain;
   };
@@ -159,7 +167,8 @@ Result<SimplifyResult> simplify_node(const NodeMesh& input, const Bounds& cell,
   // docs/benchmarks.md). No share of border edges told the two apart.
   if (options.lock_boundary && !node.free_border.empty()) {
     // (bounded only as far as it can win)
-    PreparedNode with_border = prepare_node(input, cell, true);
+    PreparedNode with_border = node;
+    prepare_boundary(with_border, true);
     SimplifyResult kept = best_grid_step(with_border, cost(result));
     if (cost(kept) <= cost(result)) result = std::move(kept);
   }
