@@ -95,8 +95,9 @@ class GridCellKeys {
 // may share are kept.
 PreparedNode prepare_node(const NodeMesh& mesh, const Bounds& cell, bool lock_boundary = true,
                           const NeighbourReach& neighbours = {});
-// Sets node.boundary and node.free_border as prepare_node does for these arguments (the rest of
-// the node is the same for any of them).
+// Sets node.boundary and node.free_border as prepare_node does for these arguments, from the
+// node's mesh, positions and cell (set by prepare_node, and the same for any boundary choice: a
+// copy of a prepared node takes another boundary without preparing it again).
 void prepare_boundary(PreparedNode& node, bool lock_boundary, const NeighbourReach& neighbours = {});
 
 // The next resolution of a search for the finest grid whose triangle count (the last one,
