@@ -13,6 +13,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "json_reader.h"
 #include "manifest_sax.h"
 
 namespace octolod {
@@ -222,14 +223,13 @@ std::string manifest_to_json(const Manifest& m) {
 
 namespace {
 
-// The manifest from `parse(sax)` (json::sax_parse of a text or a stream into that handler).
-template <class Parse>
-Result<Manifest> manifest_from_parser(const Parse& parse, std::string_view name) {
+// The manifest from `read(sax)` (read_json of a text or a stream into that handler).
+template <class Read>
+Result<Manifest> manifest_from_parser(const Read& read, std::string_view name) {
   Manifest m;
   ManifestSax sax(m.nodes);
-  parse(sax);
-  if (!sax.syntax_error().empty())
-    return bad_input_error(std::string(name) + ": not valid JSON: " + sax.syntax_error());
+  const JsonReadResult read_result = read(sax);
+  if (!read_result.error.empty()) return bad_input_error(std::string(name) + ": not valid JSON: " + read_result.error);
   const json& doc = sax.document();
   try {
     if (doc.at("format").get<std::string>() != "octolod-manifest")
@@ -270,7 +270,7 @@ Result<Manifest> manifest_from_parser(const Parse& parse, std::string_view name)
 }  // namespace
 
 Result<Manifest> manifest_from_json(std::string_view text, std::string_view name) {
-  return manifest_from_parser([&](ManifestSax& sax) { json::sax_parse(text.begin(), text.end(), &sax); }, name);
+  return manifest_from_parser([&](ManifestSax& sax) { return read_json(text, sax); }, name);
 }
 
 Status write_manifest(const std::filesystem::path& path, const Manifest& manifest) {
@@ -316,7 +316,7 @@ Result<Manifest> read_manifest(const std::filesystem::path& path) {
   if (!in) return io_error(path.string() + ": cannot open: " + std::strerror(errno));
   // parsed from the stream: a large tree's text is never held whole (180 MB for 100M triangles)
   Result<Manifest> manifest =
-      manifest_from_parser([&](ManifestSax& sax) { json::sax_parse(in, &sax); }, path.string());
+      manifest_from_parser([&](ManifestSax& sax) { return read_json(in, sax); }, path.string());
   if (in.bad()) return io_error(path.string() + ": read failed");
   return manifest;
 }

@@ -166,9 +166,8 @@ bool ManifestSax::key(string_t& value) {
 }
 
 bool ManifestSax::parse_error(std::size_t /*position*/, const std::string& /*last_token*/,
-                              const nlohmann::detail::exception& error) {
-  syntax_error_ = error.what();
-  return false;
+                              const nlohmann::detail::exception& /*error*/) {
+  return false;  // (nlohmann's parser is not used: read_json reports syntax errors)
 }
 
 // ---- one node -----------------------------------------------------------------------------

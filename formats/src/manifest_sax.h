@@ -50,12 +50,11 @@ class ManifestSax : public nlohmann::json_sax<nlohmann::json> {
   // Nodes go to `nodes`, in document order.
   explicit ManifestSax(std::vector<NodeInfo>& nodes) : nodes_(nodes) {}
 
-  // After the parse: the document without its nodes (null when it was not an object), the
-  // first node that could not be read ("node 3: ..."; empty when none), and the parser's
-  // message when the text is not JSON (empty when it is).
+  // After the read (read_json, which reports syntax errors itself): the document without its
+  // nodes (null when it was not an object) and the first node that could not be read ("node 3:
+  // ..."; empty when none).
   const nlohmann::json& document() const { return document_; }
   const std::string& node_error() const { return node_error_; }
-  const std::string& syntax_error() const { return syntax_error_; }
 
   bool null() override;
   bool boolean(bool value) override;
@@ -106,7 +105,6 @@ class ManifestSax : public nlohmann::json_sax<nlohmann::json> {
   std::vector<nlohmann::json*> open_;  // the document's containers being filled
   std::string key_;                    // the key of the document's next member
   std::string node_error_;
-  std::string syntax_error_;
   Mode mode_ = Mode::header;
   std::size_t depth_ = 0;  // containers open in the whole document
   bool nodes_key_ = false; // the document's next member is "nodes"

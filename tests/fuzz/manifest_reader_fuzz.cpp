@@ -1,5 +1,5 @@
-// libFuzzer harness for the manifest reader (manifest_from_json and its SAX handler,
-// formats/src/manifest_sax.h): any text must give a valid Manifest or a Status, never a crash,
+// libFuzzer harness for the manifest reader (manifest_from_json: the JSON reader,
+// formats/src/json_reader.h, and its SAX handler, formats/src/manifest_sax.h): any text must give a valid Manifest or a Status, never a crash,
 // an out-of-bounds access or undefined behaviour; a manifest it accepts must read back the same
 // after being written.
 //
