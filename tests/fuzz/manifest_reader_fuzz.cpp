@@ -1,7 +1,7 @@
 // libFuzzer harness for the manifest reader (manifest_from_json: the JSON reader,
-// formats/src/json_reader.h, and its SAX handler, formats/src/manifest_sax.h): any text must give a valid Manifest or a Status, never a crash,
-// an out-of-bounds access or undefined behaviour; a manifest it accepts must read back the same
-// after being written.
+// formats/src/json_reader.h, and its SAX handler, formats/src/manifest_sax.h): any text must
+// give a valid Manifest or a Status, never a crash, an out-of-bounds access or undefined
+// behaviour; a manifest it accepts must read back the same after being written.
 //
 // Build with clang (tests/CMakeLists.txt), ideally with -DOCTOLOD_SANITIZE=ON, then run
 //   manifest_reader_fuzz -max_len=65536 -timeout=10 <corpus dir>
