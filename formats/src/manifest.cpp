@@ -225,7 +225,7 @@ namespace {
 
 // The manifest from `read(sax)` (read_json of a text or a stream into that handler).
 template <class Read>
-Result<Manifest> manifest_from_parser(const Read& read, std::string_view name) {
+Result<Manifest> manifest_from_reader(const Read& read, std::string_view name) {
   Manifest m;
   ManifestSax sax(m.nodes);
   const JsonReadResult read_result = read(sax);
@@ -270,7 +270,7 @@ Result<Manifest> manifest_from_parser(const Read& read, std::string_view name) {
 }  // namespace
 
 Result<Manifest> manifest_from_json(std::string_view text, std::string_view name) {
-  return manifest_from_parser([&](ManifestSax& sax) { return read_json(text, sax); }, name);
+  return manifest_from_reader([&](ManifestSax& sax) { return read_json(text, sax); }, name);
 }
 
 Status write_manifest(const std::filesystem::path& path, const Manifest& manifest) {
@@ -316,7 +316,7 @@ Result<Manifest> read_manifest(const std::filesystem::path& path) {
   if (!in) return io_error(path.string() + ": cannot open: " + std::strerror(errno));
   // parsed from the stream: a large tree's text is never held whole (180 MB for 100M triangles)
   Result<Manifest> manifest =
-      manifest_from_parser([&](ManifestSax& sax) { return read_json(in, sax); }, path.string());
+      manifest_from_reader([&](ManifestSax& sax) { return read_json(in, sax); }, path.string());
   if (in.bad()) return io_error(path.string() + ": read failed");
   return manifest;
 }
