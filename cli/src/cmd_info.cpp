@@ -180,8 +180,11 @@ int run_info(const std::string& tree, const CommandContext& context) {
   if (m.origin != std::array<double, 3>{0.0, 0.0, 0.0})
     std::printf("origin      [%.17g %.17g %.17g] (positions below and in the node files are relative to it)\n",
                 m.origin[0], m.origin[1], m.origin[2]);
-  std::printf("bounds      [%g %g %g] .. [%g %g %g]\n", m.bounds.min[0], m.bounds.min[1],
-              m.bounds.min[2], m.bounds.max[0], m.bounds.max[1], m.bounds.max[2]);
+  if (m.bounds.empty())
+    std::printf("bounds      empty (no triangles)\n");
+  else
+    std::printf("bounds      [%g %g %g] .. [%g %g %g]\n", m.bounds.min[0], m.bounds.min[1],
+                m.bounds.min[2], m.bounds.max[0], m.bounds.max[1], m.bounds.max[2]);
   std::printf("nodes       %llu (%llu leaves), depth %u, %llu LODs\n",
               static_cast<unsigned long long>(s.nodes), static_cast<unsigned long long>(s.leaves),
               s.depth, static_cast<unsigned long long>(s.lods));
