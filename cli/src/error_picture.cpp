@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdio>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "heat_scale.h"
@@ -79,11 +80,12 @@ std::vector<float> vertex_distances(const NodeMesh& mesh, const measure::Triangl
   return distance;
 }
 
-// `mesh` (positions and normals only) with every vertex's colour heat_colour(distance / scale).
-NodeMesh coloured_by_distance(const NodeMesh& mesh, const std::vector<float>& distance, double scale) {
+// `mesh` (positions and normals only) with every vertex's colour heat_colour(distance / scale);
+// its indices are taken over, not copied.
+NodeMesh coloured_by_distance(NodeMesh&& mesh, const std::vector<float>& distance, double scale) {
   NodeMesh out;
   out.layout = VertexLayout{mesh.layout.normal, true, false};
-  out.indices = mesh.indices;
+  out.indices = std::move(mesh.indices);
   const std::size_t stride = mesh.layout.floats();
   out.vertices.reserve(distance.size() * out.layout.floats());
   for (std::size_t v = 0; v < distance.size(); ++v) {
