@@ -885,5 +885,24 @@ TEST(GltfExport, ReportsUsageAndMissingTreeErrors) {
   EXPECT_EQ(run_cli("export " + dir.path().string() + " --level 1 -o " + out).first, 4);
 }
 
+// A tree baked from an empty mesh (a root without LODs): export refuses it as extract does
+// (bad input, exit 2) and writes nothing.
+TEST(GltfExport, RefusesATreeWithoutNodeLodsLikeExtract) {
+  if (std::getenv("OCTOLOD_CLI") == nullptr) GTEST_SKIP() << "OCTOLOD_CLI not set";
+  TempDir dir;
+  const std::filesystem::path tree = dir.path() / "tree";
+  std::filesystem::create_directories(tree);
+  Manifest manifest;
+  manifest.nodes.emplace_back();
+  manifest.nodes.back().cell = {{0, 0, 0}, {1, 1, 1}};
+  ASSERT_TRUE(write_manifest(tree / std::string(kManifestFileName), manifest).ok());
+  const std::filesystem::path glb = dir.path() / "cut.glb", ply = dir.path() / "cut.ply";
+  EXPECT_EQ(run_cli("export " + tree.string() + " --error 1 -o " + glb.string()).first, 2);
+  EXPECT_EQ(run_cli("extract " + tree.string() + " --error 1 -o " + ply.string()).first, 2);
+  EXPECT_EQ(run_cli("export " + tree.string() + " --level 0 -o " + glb.string()).first, 2);
+  EXPECT_FALSE(std::filesystem::exists(glb));
+  EXPECT_FALSE(std::filesystem::exists(ply));
+}
+
 }  // namespace
 }  // namespace octolod

@@ -30,7 +30,9 @@ int run_export(const ExportArgs& args, const CommandContext& context) {
   Result<Manifest> manifest = read_tree_manifest(root);
   if (!manifest.ok()) return report(manifest.status());
 
-  const std::vector<CutEntry> cut = select_cut(manifest.value(), args.cut);
+  Result<std::vector<CutEntry>> selected = select_cut(manifest.value(), args.cut, args.tree);
+  if (!selected.ok()) return report(selected.status());
+  const std::vector<CutEntry>& cut = selected.value();
   Result<std::vector<NodeMesh>> meshes = load_cut(root, manifest.value(), cut);
   if (!meshes.ok()) return report(meshes.status());
 

@@ -27,9 +27,9 @@ int run_extract(const ExtractArgs& args, const CommandContext& context) {
   Result<Manifest> manifest = read_tree_manifest(root);
   if (!manifest.ok()) return report(manifest.status());
 
-  const std::vector<CutEntry> cut = select_cut(manifest.value(), args.cut);
-  if (cut.empty())
-    return report(bad_input_error(args.tree + ": the tree has no node LODs (an empty mesh was baked)"));
+  Result<std::vector<CutEntry>> selected = select_cut(manifest.value(), args.cut, args.tree);
+  if (!selected.ok()) return report(selected.status());
+  const std::vector<CutEntry>& cut = selected.value();
   Progress progress(context);
   progress.message("extract: " + std::to_string(cut.size()) + " node LODs");
   Result<NodeMesh> mesh = load_cut_mesh(root, manifest.value(), cut);

@@ -14,9 +14,12 @@ Status check_cut_choice(const CutChoice& choice, std::string_view command_name) 
   return {};
 }
 
-std::vector<CutEntry> select_cut(const Manifest& manifest, const CutChoice& choice) {
-  return choice.error ? uniform_error_cut(manifest, *choice.error)
-                      : depth_cut(manifest, *choice.level);
+Result<std::vector<CutEntry>> select_cut(const Manifest& manifest, const CutChoice& choice, std::string_view tree) {
+  std::vector<CutEntry> cut =
+      choice.error ? uniform_error_cut(manifest, *choice.error) : depth_cut(manifest, *choice.level);
+  if (cut.empty())
+    return bad_input_error(std::string(tree) + ": the tree has no node LODs (an empty mesh was baked)");
+  return cut;
 }
 
 }  // namespace octolod::cli

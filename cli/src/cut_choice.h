@@ -22,7 +22,8 @@ struct CutChoice {
 // error is a finite distance >= 0.
 Status check_cut_choice(const CutChoice& choice, std::string_view command_name);
 
-// The cut `choice` selects in `manifest` (after check_cut_choice).
-std::vector<CutEntry> select_cut(const Manifest& manifest, const CutChoice& choice);
+// The cut `choice` selects in `manifest` (after check_cut_choice); a bad-input error naming
+// `tree` (the tree's directory) when the tree has no node LOD to cut (an empty mesh was baked).
+Result<std::vector<CutEntry>> select_cut(const Manifest& manifest, const CutChoice& choice, std::string_view tree);
 
 }  // namespace octolod::cli
