@@ -19,8 +19,8 @@
 #include "lod_tree.h"
 #include "octolod/bake/temp_file.h"
 #include "octolod/formats/status.h"
+#include "octolod/formats/unique_fd.h"
 #include "record_file.h"
-#include "unique_fd.h"
 
 namespace octolod::bake {
 

@@ -13,8 +13,8 @@
 #include <span>
 
 #include "octolod/formats/status.h"
+#include "octolod/formats/unique_fd.h"
 #include "page_array.h"
-#include "unique_fd.h"
 
 namespace octolod::bake {
 

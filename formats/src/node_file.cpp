@@ -17,6 +17,7 @@
 #include <zlib.h>
 
 #include "byte_io.h"
+#include "octolod/formats/unique_fd.h"
 
 namespace octolod {
 namespace {
@@ -183,19 +184,19 @@ constexpr std::size_t kWriterBufferBytes = std::size_t{1} << 20;
 
 // The open file of a NodeFileWriter: closed, and removed while unfinished, when it goes.
 struct NodeFileWriter::File {
-  File(std::filesystem::path p, int descriptor) : path(std::move(p)), fd(descriptor) {}
+  File(std::filesystem::path p, UniqueFd descriptor) : path(std::move(p)), fd(std::move(descriptor)) {}
   File(const File&) = delete;
   File& operator=(const File&) = delete;
   ~File() { abandon(); }
 
   void abandon() {  // closes and removes an unfinished file
-    if (fd < 0) return;
-    ::close(std::exchange(fd, -1));
+    if (!fd.valid()) return;
+    fd.reset();
     std::error_code ignored;
     std::filesystem::remove(path, ignored);
   }
   Status write_buffer() {  // on error the file is abandoned
-    if (const int error = write_all(fd, buffer)) {
+    if (const int error = write_all(fd.get(), buffer)) {
       abandon();
       return io_error(path.string() + ": write failed: " + std::strerror(error));
     }
@@ -209,7 +210,7 @@ struct NodeFileWriter::File {
   }
 
   std::filesystem::path path;
-  int fd;
+  UniqueFd fd;
   std::size_t stride = 0;
   std::uint32_t index_bytes = 0;
   std::uint64_t vertices_left = 0;  // floats
@@ -222,9 +223,9 @@ struct NodeFileWriter::File {
 Result<NodeFileWriter> NodeFileWriter::create(const std::filesystem::path& path,
                                               VertexLayout layout, std::uint32_t vertex_count,
                                               std::uint32_t index_count, const Bounds& bounds) {
-  const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-  if (fd < 0) return io_error(path.string() + ": cannot create: " + std::strerror(errno));
-  auto file = std::make_unique<File>(path, fd);
+  UniqueFd fd(::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644));
+  if (!fd.valid()) return io_error(path.string() + ": cannot create: " + std::strerror(errno));
+  auto file = std::make_unique<File>(path, std::move(fd));
   file->stride = layout.floats();
   file->index_bytes = index_bytes_for(vertex_count);
   file->vertices_left = std::uint64_t{vertex_count} * file->stride;
@@ -241,7 +242,7 @@ NodeFileWriter::~NodeFileWriter() = default;
 
 Status NodeFileWriter::append_vertices(std::span<const float> vertices) {
   File& f = *file_;
-  assert(f.fd >= 0 && "NodeFileWriter: used after an error or finish()");
+  assert(f.fd.valid() && "NodeFileWriter: used after an error or finish()");
   assert(vertices.size() % f.stride == 0 && vertices.size() <= f.vertices_left &&
          "NodeFileWriter: partial vertex or more vertices than declared");
   f.vertices_left -= vertices.size();
@@ -257,7 +258,7 @@ Status NodeFileWriter::append_vertices(std::span<const float> vertices) {
 
 Status NodeFileWriter::append_indices(std::span<const std::uint32_t> indices) {
   File& f = *file_;
-  assert(f.fd >= 0 && "NodeFileWriter: used after an error or finish()");
+  assert(f.fd.valid() && "NodeFileWriter: used after an error or finish()");
   assert(f.vertices_left == 0 && indices.size() <= f.indices_left &&
          "NodeFileWriter: indices before the last vertex or more than declared");
   f.indices_left -= indices.size();
@@ -271,12 +272,12 @@ Status NodeFileWriter::append_indices(std::span<const std::uint32_t> indices) {
 
 Result<std::uint64_t> NodeFileWriter::finish() {
   File& f = *file_;
-  assert(f.fd >= 0 && "NodeFileWriter: used after an error or finish()");
+  assert(f.fd.valid() && "NodeFileWriter: used after an error or finish()");
   assert(f.vertices_left == 0 && f.indices_left == 0 && "NodeFileWriter: fewer items than declared");
   OCTOLOD_RETURN_IF_ERROR(f.flush());
   detail::append_le(f.buffer, f.crc);  // the checksum covers everything before it
   OCTOLOD_RETURN_IF_ERROR(f.write_buffer());
-  if (::close(std::exchange(f.fd, -1)) != 0) {
+  if (::close(f.fd.release()) != 0) {
     const int error = errno;
     std::error_code ignored;
     std::filesystem::remove(f.path, ignored);

@@ -20,6 +20,7 @@
 #include <utility>
 #include <vector>
 
+#include "octolod/formats/unique_fd.h"
 #include "ply_header.h"
 
 namespace octolod {
@@ -67,9 +68,9 @@ std::uint8_t color_byte(float c) {
 
 class FileWriter final : public PlyWriter {
  public:
-  FileWriter(std::filesystem::path path, std::string temp, int fd, const PlyWriteOptions& options,
+  FileWriter(std::filesystem::path path, std::string temp, UniqueFd fd, const PlyWriteOptions& options,
              std::uint64_t vertex_count, std::uint64_t triangle_count)
-      : path_(std::move(path)), temp_(std::move(temp)), fd_(fd), format_(options.format),
+      : path_(std::move(path)), temp_(std::move(temp)), fd_(std::move(fd)), format_(options.format),
         layout_(options.layout), color_type_(options.color_type), origin_(options.position_origin),
         vertex_count_(vertex_count),
         triangle_count_(triangle_count),
@@ -77,7 +78,6 @@ class FileWriter final : public PlyWriter {
   }
 
   ~FileWriter() override {
-    if (fd_ >= 0) ::close(fd_);
     if (!finished_) ::unlink(temp_.c_str());
   }
 
@@ -140,8 +140,7 @@ class FileWriter final : public PlyWriter {
                     std::to_string(triangles_written_) + " of " + std::to_string(triangle_count_) +
                     " triangles");
     OCTOLOD_RETURN_IF_ERROR(flush());
-    const int fd = std::exchange(fd_, -1);
-    if (::close(fd) != 0) return fail("close failed");
+    if (::close(fd_.release()) != 0) return fail("close failed");
     if (std::rename(temp_.c_str(), path_.c_str()) != 0) return fail("rename from " + temp_ + " failed");
     finished_ = true;
     return {};
@@ -234,7 +233,7 @@ class FileWriter final : public PlyWriter {
   Status flush() {
     std::size_t done = 0;
     while (done < used_) {
-      const ssize_t n = ::write(fd_, buffer_.get() + done, used_ - done);
+      const ssize_t n = ::write(fd_.get(), buffer_.get() + done, used_ - done);
       if (n < 0) {
         if (errno == EINTR) continue;
         return fail("write failed");
@@ -247,7 +246,7 @@ class FileWriter final : public PlyWriter {
 
   std::filesystem::path path_;
   std::string temp_;
-  int fd_;
+  UniqueFd fd_;
   PlyFormat format_;
   VertexLayout layout_;
   PlyColorType color_type_;
@@ -264,7 +263,7 @@ class FileWriter final : public PlyWriter {
 };
 
 // Creates "<path>.tmp-<16 hex digits>" exclusively, mode 0666 minus the umask like any new file.
-Result<std::pair<std::string, int>> create_temporary(const std::filesystem::path& path) {
+Result<std::pair<std::string, UniqueFd>> create_temporary(const std::filesystem::path& path) {
   static thread_local std::mt19937_64 random{std::random_device{}() ^
                                               static_cast<std::uint64_t>(::getpid())};
   for (int attempt = 0; attempt < 100; ++attempt) {
@@ -272,8 +271,8 @@ Result<std::pair<std::string, int>> create_temporary(const std::filesystem::path
     std::snprintf(suffix, sizeof(suffix), ".tmp-%016llx",
                   static_cast<unsigned long long>(random()));
     std::string temp = path.string() + suffix;
-    const int fd = ::open(temp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
-    if (fd >= 0) return std::pair{std::move(temp), fd};
+    UniqueFd fd(::open(temp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666));
+    if (fd.valid()) return std::pair{std::move(temp), std::move(fd)};
     if (errno != EEXIST)
       return io_error(path.string() + ": cannot create temporary file " + temp + ": " +
                       std::strerror(errno));
@@ -290,9 +289,9 @@ Result<std::unique_ptr<PlyWriter>> PlyWriter::create(const std::filesystem::path
   for (const std::string& comment : options.comments)
     if (comment.find_first_of("\r\n") != std::string::npos)
       return usage_error(path.string() + ": PLY comment contains a line break: " + comment);
-  Result<std::pair<std::string, int>> temp = create_temporary(path);
+  Result<std::pair<std::string, UniqueFd>> temp = create_temporary(path);
   if (!temp.ok()) return temp.status();
-  auto writer = std::make_unique<FileWriter>(path, temp->first, temp->second, options,
+  auto writer = std::make_unique<FileWriter>(path, temp->first, std::move(temp->second), options,
                                              vertex_count, triangle_count);
   OCTOLOD_RETURN_IF_ERROR(writer->start(ply::format_header(header_for(options, vertex_count,
                                                                       triangle_count))));

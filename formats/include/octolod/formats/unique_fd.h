@@ -1,12 +1,13 @@
 // An owned POSIX file descriptor: closed when its owner is destroyed or given another; moving
 // hands it over (the moved-from one owns none). Lets classes that hold files default their moves.
+// Shared by the libraries that write their own files (formats' writers, bake's record files).
 #pragma once
 
 #include <unistd.h>
 
 #include <utility>
 
-namespace octolod::bake {
+namespace octolod {
 
 class UniqueFd {
  public:
@@ -36,4 +37,4 @@ class UniqueFd {
   int fd_ = -1;
 };
 
-}  // namespace octolod::bake
+}  // namespace octolod
