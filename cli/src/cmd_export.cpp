@@ -27,23 +27,21 @@ std::string mesh_name(const NodeInfo& node, std::uint32_t lod) {
 int run_export(const ExportArgs& args, const CommandContext& context) {
   const auto start = std::chrono::steady_clock::now();
   const std::filesystem::path root = args.tree;
-  Result<Manifest> manifest = read_tree_manifest(root);
-  if (!manifest.ok()) return report(manifest.status());
-
-  Result<std::vector<CutEntry>> selected = select_cut(manifest.value(), args.cut, args.tree);
-  if (!selected.ok()) return report(selected.status());
-  const std::vector<CutEntry>& cut = selected.value();
-  Result<std::vector<NodeMesh>> meshes = load_cut(root, manifest.value(), cut);
+  Result<ChosenCut> chosen = read_chosen_cut(root, args.cut);
+  if (!chosen.ok()) return report(chosen.status());
+  const Manifest& manifest = chosen->manifest;
+  const std::vector<CutEntry>& cut = chosen->cut;
+  Result<std::vector<NodeMesh>> meshes = load_cut(root, manifest, cut);
   if (!meshes.ok()) return report(meshes.status());
 
   GltfWriteOptions options;
   options.binary = std::filesystem::path(args.output).extension() != ".gltf";
   options.draco = args.draco;
   options.draco_options = args.draco_options;
-  options.translation = manifest->origin;
+  options.translation = manifest.origin;
   std::uint64_t triangles = 0, vertices = 0;
   for (std::size_t i = 0; i < cut.size(); ++i) {
-    options.names.push_back(mesh_name(manifest->nodes[cut[i].node], cut[i].lod));
+    options.names.push_back(mesh_name(manifest.nodes[cut[i].node], cut[i].lod));
     triangles += meshes.value()[i].triangle_count();
     vertices += meshes.value()[i].vertex_count();
   }
@@ -55,7 +53,7 @@ int run_export(const ExportArgs& args, const CommandContext& context) {
   const std::uint64_t bytes = written_bytes.value();
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  const CutSummary summary = summarize_cut(manifest.value(), cut);
+  const CutSummary summary = summarize_cut(manifest, cut);
   if (context.json) {
     print_json({{"file", args.output},
                 {"format", options.binary ? "glb" : "gltf"},

@@ -24,18 +24,16 @@ namespace octolod::cli {
 int run_extract(const ExtractArgs& args, const CommandContext& context) {
   const auto start = std::chrono::steady_clock::now();
   const std::filesystem::path root = args.tree;
-  Result<Manifest> manifest = read_tree_manifest(root);
-  if (!manifest.ok()) return report(manifest.status());
-
-  Result<std::vector<CutEntry>> selected = select_cut(manifest.value(), args.cut, args.tree);
-  if (!selected.ok()) return report(selected.status());
-  const std::vector<CutEntry>& cut = selected.value();
+  Result<ChosenCut> chosen = read_chosen_cut(root, args.cut);
+  if (!chosen.ok()) return report(chosen.status());
+  const Manifest& manifest = chosen->manifest;
+  const std::vector<CutEntry>& cut = chosen->cut;
   Progress progress(context);
   progress.message("extract: " + std::to_string(cut.size()) + " node LODs");
-  Result<NodeMesh> mesh = load_cut_mesh(root, manifest.value(), cut);
+  Result<NodeMesh> mesh = load_cut_mesh(root, manifest, cut);
   if (!mesh.ok()) return report(mesh.status());
   const Status written =
-      write_mesh_file(args.output, mesh.value(), args.ascii, PlyColorType::uchar, manifest->origin);
+      write_mesh_file(args.output, mesh.value(), args.ascii, PlyColorType::uchar, manifest.origin);
   if (!written.ok()) return report(written);
 
   const Result<std::uint64_t> written_bytes = written_file_size(args.output);
@@ -44,21 +42,21 @@ int run_extract(const ExtractArgs& args, const CommandContext& context) {
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   progress.finish("extract", seconds);
-  const CutSummary summary = summarize_cut(manifest.value(), cut);
-  const double percent = manifest->input_triangles
+  const CutSummary summary = summarize_cut(manifest, cut);
+  const double percent = manifest.input_triangles
                              ? 100.0 * static_cast<double>(mesh->triangle_count()) /
-                                   static_cast<double>(manifest->input_triangles)
+                                   static_cast<double>(manifest.input_triangles)
                              : 0.0;
   if (context.json) {
     nlohmann::json lods = nlohmann::json::array();
     for (const CutEntry& e : cut)
-      lods.push_back({{"node", manifest->nodes[e.node].path}, {"lod", e.lod}});
+      lods.push_back({{"node", manifest.nodes[e.node].path}, {"lod", e.lod}});
     print_json({{"file", args.output},
                 {"node_lods", cut.size()},
                 {"lods", lods},
                 {"triangles", mesh->triangle_count()},
                 {"vertices", mesh->vertex_count()},
-                {"input_triangles", manifest->input_triangles},
+                {"input_triangles", manifest.input_triangles},
                 {"percent_of_input", percent},
                 {"max_error", summary.max_error},
                 {"layout", mesh->layout.describe()},

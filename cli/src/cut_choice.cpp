@@ -3,6 +3,7 @@
 
 #include <cmath>
 #include <string>
+#include <utility>
 
 namespace octolod::cli {
 
@@ -14,12 +15,14 @@ Status check_cut_choice(const CutChoice& choice, std::string_view command_name) 
   return {};
 }
 
-Result<std::vector<CutEntry>> select_cut(const Manifest& manifest, const CutChoice& choice, std::string_view tree) {
+Result<ChosenCut> read_chosen_cut(const std::filesystem::path& tree, const CutChoice& choice) {
+  Result<Manifest> manifest = read_tree_manifest(tree);
+  if (!manifest.ok()) return manifest.status();
   std::vector<CutEntry> cut =
-      choice.error ? uniform_error_cut(manifest, *choice.error) : depth_cut(manifest, *choice.level);
+      choice.error ? uniform_error_cut(manifest.value(), *choice.error) : depth_cut(manifest.value(), *choice.level);
   if (cut.empty())
-    return bad_input_error(std::string(tree) + ": the tree has no node LODs (an empty mesh was baked)");
-  return cut;
+    return bad_input_error(tree.string() + ": the tree has no node LODs (an empty mesh was baked)");
+  return ChosenCut{std::move(manifest.value()), std::move(cut)};
 }
 
 }  // namespace octolod::cli

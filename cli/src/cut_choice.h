@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstdint>
+#include <filesystem>
 #include <optional>
 #include <string_view>
 #include <vector>
@@ -22,8 +23,15 @@ struct CutChoice {
 // error is a finite distance >= 0.
 Status check_cut_choice(const CutChoice& choice, std::string_view command_name);
 
-// The cut `choice` selects in `manifest` (after check_cut_choice); a bad-input error naming
-// `tree` (the tree's directory) when the tree has no node LOD to cut (an empty mesh was baked).
-Result<std::vector<CutEntry>> select_cut(const Manifest& manifest, const CutChoice& choice, std::string_view tree);
+// A tree's manifest and the cut `choice` selects in it.
+struct ChosenCut {
+  Manifest manifest;
+  std::vector<CutEntry> cut;  // never empty
+};
+
+// Reads the manifest of the tree at `tree` (its directory) and selects the cut `choice` gives
+// (after check_cut_choice). Errors: those of read_tree_manifest, and bad_input naming `tree` when
+// the tree has no node LOD to cut (an empty mesh was baked).
+Result<ChosenCut> read_chosen_cut(const std::filesystem::path& tree, const CutChoice& choice);
 
 }  // namespace octolod::cli
