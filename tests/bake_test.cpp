@@ -1,4 +1,4 @@
-// The bake pipeline (seed 3.4, 4.3; ARCHITECTURE.md stages 3 and 6): the leaves hold exactly
+// The bake pipeline (seed 3.4, 4.3; docs/design.md stages 3 and 6): the leaves hold exactly
 // the input's triangles (their LOD 0; the LOD chains are lod_tree_test.cpp's), the tree obeys
 // max_tris / max_depth, bounds and cells are consistent,
 // the output does not depend on threads or budget, and failures (out of space, a killed or

@@ -1,4 +1,4 @@
-// The bake's LOD hierarchy (seed 3.5.3, 5.3.2; ARCHITECTURE.md stage 5; issue 4 "Checked by"):
+// The bake's LOD hierarchy (seed 3.5.3, 5.3.2; docs/design.md stage 5; issue 4 "Checked by"):
 // every node has a LOD chain, any mix of node LODs that covers a closed model is closed (no
 // crack), every stored error bounds the measured distance from the node's original triangles,
 // and the tree is the same for any thread count.

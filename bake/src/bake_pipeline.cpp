@@ -1,4 +1,4 @@
-// The bake pipeline (ARCHITECTURE.md stages 2-7; seed 3.4, 3.5.3, 4.3): soup, Morton sort and
+// The bake pipeline (docs/design.md stages 2-7; seed 3.4, 3.5.3, 4.3): soup, Morton sort and
 // streaming octree with the LOD hierarchy built on worker threads meanwhile (lod_tree.h),
 // manifest, atomic publication. See
 // octolod/bake/bake.h for the contract.

@@ -1,4 +1,4 @@
-// The LOD hierarchy of a bake (seed 3.5.3, 5.3.2; ARCHITECTURE.md stages 5 and 7), built while
+// The LOD hierarchy of a bake (seed 3.5.3, 5.3.2; docs/design.md stages 5 and 7), built while
 // the octree stream hands out its leaves:
 //
 //   leaf      its triangles are indexed (node_index.h) and become LOD 0 (the original, error 0);

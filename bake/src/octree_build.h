@@ -1,5 +1,5 @@
 // The on-disk octree's shape, decided in one streaming pass over the soup sorted by centroid
-// Morton code (seed 3.4, 4.3; ARCHITECTURE.md stage 3).
+// Morton code (seed 3.4, 4.3; docs/design.md stage 3).
 //
 // The seed re-reads every triangle once per level to split the nodes of that level (I/O grows
 // with N x depth). Here the soup is sorted once by Morton key (external sort), which makes

@@ -1,5 +1,5 @@
 // Temporary directories, stale-directory housekeeping, atomic publication and SIGINT/SIGTERM
-// cleanup of the bake (ARCHITECTURE.md stage 6), see temp_dir.h.
+// cleanup of the bake (docs/design.md stage 6), see temp_dir.h.
 #include "temp_dir.h"
 
 #include <fcntl.h>

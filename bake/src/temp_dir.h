@@ -1,4 +1,4 @@
-// The bake's temporary directories and atomic publication (ARCHITECTURE.md stage 6: a bake
+// The bake's temporary directories and atomic publication (docs/design.md stage 6: a bake
 // writes to a temporary directory and renames it into place when complete; temporary files
 // never outlive the process).
 //

@@ -1,5 +1,5 @@
 // octolod bake: a PLY mesh of any size becomes an on-disk LOD octree directory within a memory
-// budget (octolod/bake/bake.h; ARCHITECTURE.md stages 1-7): the octree, every node's LOD chain
+// budget (octolod/bake/bake.h; docs/design.md stages 1-7): the octree, every node's LOD chain
 // (--method), the manifest.
 //
 // Exit codes: 1 usage, 2 bad input, 3 unsupported, 4 I/O (unwritable output, out of space, the

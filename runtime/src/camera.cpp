@@ -1,6 +1,6 @@
 // Frustum planes from a view-projection matrix (Gribb & Hartmann 2001, "Fast extraction of
 // viewing frustum planes from the world-view-projection matrix") and the p-vertex / n-vertex box
-// test that replaces the seed's "a corner is inside" test (ARCHITECTURE.md "The runtime").
+// test that replaces the seed's "a corner is inside" test (docs/design.md "The runtime").
 #include "octolod/runtime/camera.h"
 
 #include <cmath>

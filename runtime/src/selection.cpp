@@ -1,6 +1,6 @@
 // Cut selection, see selection.h. The culling test is the p-vertex / n-vertex test with plane
 // masks (a box entirely inside a plane's half-space passes that plane for its whole subtree,
-// since subtree boxes nest); the error rule is ARCHITECTURE.md's
+// since subtree boxes nest); the error rule is docs/design.md's
 //   error · viewport_h / (2·tan(fovy/2) · distance) <= target_sse_pixels
 // rewritten as error <= distance · error_per_distance, so no division per LOD.
 #include "selection.h"

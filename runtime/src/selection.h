@@ -1,4 +1,4 @@
-// View-dependent cut selection (seed 4.5; ARCHITECTURE.md "The runtime"): frustum culling by
+// View-dependent cut selection (seed 4.5; docs/design.md "The runtime"): frustum culling by
 // box vs plane on subtree boxes, then per node the coarsest LOD within the screen-space error
 // target (or the seed's distance thresholds), else its children. Iterative, allocation-free in
 // steady state (the caller owns and reuses the output vectors).

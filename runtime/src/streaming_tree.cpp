@@ -1,5 +1,5 @@
 // StreamingTree: one frame = install completed loads, select the cut, substitute resident LODs
-// for missing ones, then page. ARCHITECTURE.md "The runtime"; seed 002 sections 3.6 and 4.5;
+// for missing ones, then page. docs/design.md "The runtime"; seed 002 sections 3.6 and 4.5;
 // El-Sana & Chiang 2000 (prefetching, buffer management with second chance, I/O separate from
 // rendering); Holst & Schumann (caching measured along camera paths).
 #include "octolod/runtime/streaming_tree.h"
@@ -388,7 +388,7 @@ void StreamingTree::Impl::update_in_use() {
   previously_in_use.swap(in_use);
 }
 
-// Prefetch (El-Sana & Chiang 2000; ARCHITECTURE.md): the LOD one step finer and one step coarser
+// Prefetch (El-Sana & Chiang 2000; docs/design.md): the LOD one step finer and one step coarser
 // than wanted ones (the next LOD of the node, else its children's coarsest / its parent's
 // finest), and the cut seen from where the camera will be if it keeps its velocity. Both are
 // planned a bounded piece per frame (StreamingOptions::prefetch_cut_entries_per_frame,

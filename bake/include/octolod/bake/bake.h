@@ -1,4 +1,4 @@
-// The bake: a PLY mesh of any size becomes an on-disk LOD octree directory (ARCHITECTURE.md
+// The bake: a PLY mesh of any size becomes an on-disk LOD octree directory (docs/design.md
 // stages 1-6; seed 3.3-3.5, 4.2-4.4):
 //
 //   soup      the PLY becomes one self-contained record per triangle (octolod/bake/soup.h)

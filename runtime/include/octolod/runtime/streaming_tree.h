@@ -1,4 +1,4 @@
-// StreamingTree: view-dependent selection and paging of a baked LOD octree (ARCHITECTURE.md "The
+// StreamingTree: view-dependent selection and paging of a baked LOD octree (docs/design.md "The
 // runtime"; seed 002 sections 3.6 and 4.5; El-Sana & Chiang 2000 for prefetching, buffer
 // management with second chance and I/O separate from rendering; Holst & Schumann for caching
 // measured along camera paths).
