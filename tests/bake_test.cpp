@@ -555,14 +555,15 @@ TEST_F(BakeTest, BadOptionsAndPathsAreReportedBeforeAnythingIsWritten) {
   expect_no_temp_files();
 }
 
-// The budget a refused bake names ("needs at least N MiB"), after checking that it was refused
+// The budget a refused bake names ("a budget of N MiB suffices"), after checking that it was refused
 // as a usage error; 0 when the message names none.
 std::uint64_t needed_mib(const Result<BakeReport>& refused) {
   EXPECT_EQ(refused.status().code(), ErrorCode::usage);
   const std::string message = refused.status().message();
-  const std::size_t at = message.find("needs at least ");
+  const std::string phrase = "a budget of ";
+  const std::size_t at = message.find(phrase);
   EXPECT_NE(at, std::string::npos) << message;
-  return at == std::string::npos ? 0 : std::stoull(message.substr(at + 15));
+  return at == std::string::npos ? 0 : std::stoull(message.substr(at + phrase.size()));
 }
 
 // A budget too small for max_tris (node work, leaf buffers, a quarter for the sort) is refused
@@ -584,7 +585,7 @@ TEST_F(BakeTest, ATooSmallBudgetNamesTheBudgetThatSuffices) {
   o.program_bytes = 8 << 20;  // the same budget no longer leaves the bake enough
   auto short_by_the_program = bake(o);
   ASSERT_EQ(short_by_the_program.status().code(), ErrorCode::usage);
-  EXPECT_NE(short_by_the_program.status().message().find("needs at least " + std::to_string(needed + 8)),
+  EXPECT_NE(short_by_the_program.status().message().find("a budget of " + std::to_string(needed + 8) + " MiB suffices"),
             std::string::npos)
       << short_by_the_program.status().message();
   o.memory_budget_bytes = (needed + 8) << 20;

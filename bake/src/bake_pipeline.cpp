@@ -141,9 +141,9 @@ Result<OctreeBudget> divide_octree_budget(const BakeOptions& options, VertexLayo
                        (input_triangles != kUnknownTriangles
                             ? " and an input of " + std::to_string(input_triangles) + " triangles"
                             : std::string()) +
-                       ": needs at least " +
+                       ": a budget of " +
                        std::to_string(((fixed + options.program_bytes) >> 20) + 1) +
-                       " MiB (a smaller --max-tris needs less)");
+                       " MiB suffices (the exact threshold can be a few MiB lower; a smaller --max-tris needs less)");
   }
   b.sort_bytes = options.memory_budget_bytes - reserve;
   return b;

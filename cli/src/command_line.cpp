@@ -48,8 +48,8 @@ void add_bake_command(CLI::App& app, CommandContext& context) {
   command
       ->add_option("--memory", args->memory,
                    "Peak memory (RSS) of the whole process: 48M, 64M, 1G (the program itself "
-                   "takes 8M of it; at least ~46M at --max-tris 2000 with every attribute, the "
-                   "bake says how much)")
+                   "takes 8M of it; about 46M at least at --max-tris 2000 with every attribute: "
+                   "a budget too small is refused with one that suffices)")
       ->capture_default_str();
   command->add_option("--work-dir", args->work_dir,
                       "Directory for temporary files (default: next to the output)");
@@ -148,7 +148,7 @@ void add_export_command(CLI::App& app, CommandContext& context) {
       "Compress with Draco (KHR_draco_mesh_compression; lossy, see --position-bits)");
   command
       ->add_option("--position-bits", args->draco_options.position_bits,
-                   "Draco position quantization bits (1..30) over the cut's bounding cube")
+                   "Draco position quantization bits (1..30; 0 keeps float positions) over the cut's bounding cube")
       ->capture_default_str()
       ->needs(draco);
   command->callback([args, &context] {

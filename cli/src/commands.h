@@ -78,7 +78,7 @@ struct RenderArgs {
   int width = 1024;
   int height = 768;
   // The runtime's default (walk's too): the framed demo rock (samples/rock_small.ply, 40K
-  // triangles) is drawn from two detail levels at 2 px (13.5K triangles), from the root's one
+  // triangles) is drawn from two detail levels at 2 px (13.9K triangles), from the root's one
   // LOD alone at 4 px.
   double sse = 2.0;
   std::string budget = "512M";

@@ -131,7 +131,7 @@ std::optional<ClusterMethod> parse_method(std::string_view name);
 
 inline constexpr std::uint64_t kMinBakeBudget = std::uint64_t{1} << 20;
 // What the octolod CLI holds before a bake starts, rounded up: its code and libraries
-// (OpenMesh, Draco, CGAL, OSMesa, ...) resident, 6.9 MiB measured idle, and the bake's thread
+// (OpenMesh, Draco, OSMesa, ...) resident, 6.9 MiB measured idle, and the bake's thread
 // stacks.
 inline constexpr std::uint64_t kCliProgramBytes = std::uint64_t{8} << 20;
 
