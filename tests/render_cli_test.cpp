@@ -162,7 +162,6 @@ TEST_F(RenderCli, SyntheticTreeShowsOneTintPerDetailLevelAndNoOther) {
   ASSERT_TRUE(run.json.is_object());
   EXPECT_TRUE(run.json.at("complete").get<bool>());
   EXPECT_EQ(run.json.at("fallbacks"), 0);
-  EXPECT_EQ(run.json.at("loads_failed"), 0);
 
   // the histogram accounts for every drawn node and triangle
   std::set<std::uint32_t> levels;
@@ -390,6 +389,33 @@ TEST_F(RenderCli, MalformedCameraIsAUsageErrorAndWritesNothing) {
   }
   EXPECT_EQ(octolod("render " + (dir / "missing").string() + " -o " + png.string(), dir).exit_code, 4);
   EXPECT_FALSE(std::filesystem::exists(png));
+  std::filesystem::remove_all(dir);
+}
+
+// A node file that fails to load (here: every one, its middle byte flipped) fails the
+// command naming the file, and no picture is written: a damaged tree is bad input, not a picture
+// of fallbacks.
+TEST_F(RenderCli, ANodeFileThatFailsToLoadIsBadInputAndWritesNothing) {
+  const auto dir = scratch_dir("damaged");
+  runtime::testing::write_tree(runtime::testing::make_full_octree(2), dir / "tree");
+  std::size_t damaged = 0;
+  for (const auto& entry : std::filesystem::recursive_directory_iterator(dir / "tree")) {
+    if (!entry.is_regular_file() || entry.path().filename() == "manifest.json") continue;
+    const auto middle = static_cast<std::streamoff>(std::filesystem::file_size(entry.path()) / 2);
+    std::fstream file(entry.path(), std::ios::in | std::ios::out | std::ios::binary);
+    file.seekg(middle);
+    const char byte = static_cast<char>(file.get() ^ 0x5A);
+    file.seekp(middle);
+    file.put(byte);
+    ++damaged;
+  }
+  ASSERT_GT(damaged, 0u);
+  const auto png = dir / "frame.png";
+  EXPECT_EQ(octolod("render " + (dir / "tree").string() + " -o " + png.string(), dir).exit_code, 2);
+  EXPECT_FALSE(std::filesystem::exists(png));
+  const std::string errors = file_text(dir / "stderr.txt");
+  EXPECT_NE(errors.find("lod0.bin"), std::string::npos) << errors;  // the root's, loaded first
+  EXPECT_NE(errors.find("no picture written"), std::string::npos) << errors;
   std::filesystem::remove_all(dir);
 }
 

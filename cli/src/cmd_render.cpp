@@ -76,7 +76,7 @@ int run_render(const RenderArgs& args, const CommandContext& context) {
   options.target_sse_pixels = args.sse;
   options.prefetch = false;  // one view: load what it draws, nothing around it
   options.max_loads_in_flight = kLoadsPerUpdate;
-  options.log = [](std::string_view message) {
+  options.log = [](std::string_view message) {  // a failed load: the command fails after the loop
     std::fprintf(stderr, "warning: %.*s\n", static_cast<int>(message.size()), message.data());
   };
   auto executor = std::make_shared<runtime::SynchronousExecutor>();
@@ -104,6 +104,9 @@ int run_render(const RenderArgs& args, const CommandContext& context) {
     loads += frame->stats.loads_completed;
     failed += frame->stats.loads_failed;
   }
+  if (failed > 0)
+    return report(bad_input_error(args.tree + ": " + std::to_string(failed) +
+                                  " node LOD(s) failed to load (the warnings above name them); no picture written"));
   const runtime::FrameStats& stats = frame->stats;
   const bool complete = stats.loads_in_flight == 0 && stats.loads_issued == 0;
   if (!complete)
@@ -155,7 +158,6 @@ int run_render(const RenderArgs& args, const CommandContext& context) {
                 {"culled", stats.culled},
                 {"coarsening", stats.coarsening},
                 {"loads", loads},
-                {"loads_failed", failed},
                 {"resident_bytes", stats.resident_bytes},
                 {"lod_histogram", histogram},
                 {"seconds", seconds}});
@@ -163,9 +165,9 @@ int run_render(const RenderArgs& args, const CommandContext& context) {
     std::printf("%s -> %s (%dx%d), eye (%.4g, %.4g, %.4g), %u updates%s\n", args.tree.c_str(), args.output.c_str(),
                 args.width, args.height, static_cast<double>(eye.x), static_cast<double>(eye.y),
                 static_cast<double>(eye.z), static_cast<unsigned>(updates), complete ? "" : " (incomplete)");
-    std::printf("  drawn: %u nodes, %llu triangles, %u fallbacks; %llu loads (%llu failed), %.1f MB resident\n",
+    std::printf("  drawn: %u nodes, %llu triangles, %u fallbacks; %llu loads, %.1f MB resident\n",
                 stats.drawn_nodes, static_cast<unsigned long long>(stats.drawn_triangles), stats.fallbacks,
-                static_cast<unsigned long long>(loads), static_cast<unsigned long long>(failed),
+                static_cast<unsigned long long>(loads),
                 static_cast<double>(stats.resident_bytes) / 1048576.0);
     for (const nlohmann::json& level : histogram)
       std::printf("  level %u (%s): %llu nodes, %llu triangles\n", level["level"].get<unsigned>(),
