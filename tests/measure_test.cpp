@@ -399,6 +399,16 @@ TEST(Metro, RejectsBadMeshes) {
   NodeMesh nan = good;
   nan.vertices[1] = std::nanf("");
   EXPECT_EQ(evaluate(nan, good).status().code(), ErrorCode::bad_input);
+  // finite, but squared distances to it overflow float (closest-point queries found nothing,
+  // and the attribute comparison then read past the triangles: a crash)
+  const NodeMesh shaded = plane_mesh({true, false, false}, 2, 1.0f, 0.0f);
+  NodeMesh far = shaded;
+  far.vertices[0] = 1e20f;
+  r = evaluate(shaded, far, small_options());
+  EXPECT_EQ(r.status().code(), ErrorCode::bad_input);
+  EXPECT_NE(r.status().message().find("beyond"), std::string::npos) << r.status().message();
+  far.vertices[0] = 1e17f;  // within the limit: measured
+  EXPECT_TRUE(evaluate(shaded, far, small_options()).ok());
 }
 
 // Reference simplification ----------------------------------------------------------------------

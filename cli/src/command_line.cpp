@@ -94,16 +94,18 @@ void add_compare_command(CLI::App& app, CommandContext& context) {
   command->add_flag("--no-reference", args->no_reference,
                     "Skip the reference decimation (the cut columns only; much faster on "
                     "large inputs)");
-  command->add_option("--pictures", args->pictures,
-                      "Directory (created) for one PNG per cut, framed like render's overview: the "
-                      "cut coloured by its distance to the input next to the input coloured by its "
-                      "distance to the cut, and a row the same for the reference (blue none, red "
-                      "the picture's largest)");
+  CLI::Option* pictures = command->add_option(
+      "--pictures", args->pictures,
+      "Directory (created) for one PNG per cut, framed like render's overview: the "
+      "cut coloured by its distance to the input next to the input coloured by its "
+      "distance to the cut, and a row the same for the reference (blue none, red "
+      "the picture's largest)");
   command
       ->add_option("--picture-scale", args->picture_scale,
                    "Distance (model units) at the red end of the pictures' colour scale, the same "
                    "for every picture (default: each picture's largest)")
-      ->check(CLI::PositiveNumber);
+      ->check(CLI::PositiveNumber)
+      ->needs(pictures);
   command->callback([args, &context] { context.exit_code = run_compare(*args, context); });
 }
 
@@ -124,14 +126,16 @@ void add_eval_command(CLI::App& app, CommandContext& context) {
       ->capture_default_str();
   command->add_option("--threads", args->threads,
                       "Query threads (default: all cores; the numbers do not depend on it)");
-  command->add_option("--picture", args->picture,
-                      "PNG of B coloured by its distance to A next to A coloured by its distance "
-                      "to B, framed like render's overview (blue none, red the largest)");
+  CLI::Option* picture = command->add_option(
+      "--picture", args->picture,
+      "PNG of B coloured by its distance to A next to A coloured by its distance "
+      "to B, framed like render's overview (blue none, red the largest)");
   command
       ->add_option("--picture-scale", args->picture_scale,
                    "Distance (model units) at the red end of the picture's colour scale (default: "
                    "its largest)")
-      ->check(CLI::PositiveNumber);
+      ->check(CLI::PositiveNumber)
+      ->needs(picture);
   command->callback([args, &context] { context.exit_code = run_eval(*args, context); });
 }
 

@@ -1,6 +1,7 @@
 #include "mesh_check.h"
 
 #include <cmath>
+#include <cstdio>
 #include <string>
 
 namespace octolod::measure {
@@ -21,10 +22,18 @@ Status check_mesh(const NodeMesh& mesh, std::string_view name) {
                              std::to_string(mesh.indices[i]) + ", but there are only " +
                              std::to_string(vertex_count) + " vertices");
   for (std::size_t v = 0; v < vertex_count; ++v)
-    for (std::size_t k = 0; k < 3; ++k)
-      if (!std::isfinite(mesh.vertices[v * stride + k]))
+    for (std::size_t k = 0; k < 3; ++k) {
+      const float c = mesh.vertices[v * stride + k];
+      if (!std::isfinite(c))
         return bad_input_error(std::string(name) + ": vertex " + std::to_string(v) +
                                " has a non-finite coordinate");
+      if (std::abs(c) > kMaxMeasurableCoordinate) {
+        char value[32];
+        std::snprintf(value, sizeof(value), "%g", static_cast<double>(c));
+        return bad_input_error(std::string(name) + ": vertex " + std::to_string(v) + " has a coordinate of " +
+                               value + ", beyond ±1e18: distances that far out overflow float");
+      }
+    }
   return {};
 }
 

@@ -77,7 +77,7 @@ struct MetroReport {
 // Compares two meshes. Positions only decide the distances; normals/colours/uvs are compared
 // where both layouts have them. Errors (bad_input): a mesh with no triangles or zero total area,
 // indices out of range or not a multiple of 3, vertices not a multiple of the layout, non-finite
-// positions. Memory: about 64 bytes per triangle of each mesh (two TriangleBvh) plus O(samples /
+// positions or coordinates beyond ±1e18 (their squared distances would overflow float). Memory: about 64 bytes per triangle of each mesh (two TriangleBvh) plus O(samples /
 // 4096) for the deterministic partial sums; the samples themselves are never stored.
 Result<MetroReport> evaluate(const NodeMesh& a, const NodeMesh& b, const MetroOptions& options = {});
 
