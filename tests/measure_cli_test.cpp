@@ -220,6 +220,9 @@ TEST(EvalCli, BadInputsExitWithCodeAndFileName) {
   // usage
   EXPECT_EQ(run_cli(dir, "eval " + good).code, 1);
   EXPECT_EQ(run_cli(dir, "eval " + good + " " + good + " --samples lots").code, 1);
+  // counts a typo makes huge (-1 wraps to 2^64 - 1): usage errors, not exhausted memory or threads
+  for (const char* option : {"--samples -1", "--samples 1e12", "--threads 100000", "--picture-scale nan"})
+    EXPECT_EQ(run_cli(dir, "eval " + good + " " + good + " " + option).code, 1) << option;
 }
 
 // --- extract -----------------------------------------------------------------------------------

@@ -464,5 +464,26 @@ TEST_F(RenderCli, WalkFramesPngWritesEveryKthFrame) {
   std::filesystem::remove_all(dir);
 }
 
+// Counts a typo could make huge are usage errors, not exhausted threads or memory, and a camera
+// path that is a directory or broken JSON is named with what is wrong (line and column).
+TEST_F(RenderCli, WalkRefusesHugeCountsAndBadCameraPaths) {
+  const auto dir = scratch_dir("walk_bad");
+  runtime::testing::write_tree(runtime::testing::make_full_octree(2), dir / "tree");
+  const std::string walk = "walk " + (dir / "tree").string() + " --fps 0 ";
+  for (const char* option : {"--frames 4294967295", "--frames 0", "--threads 100000", "--threads 0",
+                             "--loads-in-flight 0", "--fps 1e-9", "--fps nan"})
+    EXPECT_EQ(octolod(walk + option, dir).exit_code, 1) << option;
+  EXPECT_EQ(octolod(walk + "--frames 3 --path " + dir.string(), dir).exit_code, 4);
+  EXPECT_NE(file_text(dir / "stderr.txt").find("not a regular file"), std::string::npos) << file_text(dir / "stderr.txt");
+  {
+    std::ofstream(dir / "cut.json") << "{\"keyframes\": [{\"eye\": [1, 2, 3],\n \"target\": [0, 0";
+  }
+  EXPECT_EQ(octolod(walk + "--frames 3 --path " + (dir / "cut.json").string(), dir).exit_code, 2);
+  const std::string errors = file_text(dir / "stderr.txt");
+  EXPECT_NE(errors.find("line 2"), std::string::npos) << errors;
+  EXPECT_EQ(errors.find("json.exception"), std::string::npos) << errors;
+  std::filesystem::remove_all(dir);
+}
+
 }  // namespace
 }  // namespace octolod::cli

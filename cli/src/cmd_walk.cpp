@@ -2,9 +2,11 @@
 // real node files through loader threads (octolod::runtime), and reports per-frame and summary
 // paging statistics — the camera-path measurements of seeds 000 and 003 and Holst & Schumann.
 #include <algorithm>
+#include <cerrno>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <memory>
@@ -41,18 +43,33 @@ glm::vec3 vec(const nlohmann::json& j) {
   return glm::vec3(j.at(0).get<float>(), j.at(1).get<float>(), j.at(2).get<float>());
 }
 
+// nlohmann's message without its "[json.exception.parse_error.101] " tag.
+std::string json_message(const nlohmann::json::exception& e) {
+  const std::string what = e.what();
+  const std::size_t tag_end = what.find("] ");
+  return tag_end == std::string::npos ? what : what.substr(tag_end + 2);
+}
+
 // {"keyframes": [{"eye": [x,y,z], "target": [x,y,z]}, ...]} in model units, at least two.
 Result<std::vector<Key>> read_keyframes(const std::string& file) {
+  std::error_code error;
+  const auto status = std::filesystem::status(file, error);
+  if (error) return io_error(file + ": cannot open camera path: " + error.message());
+  if (!std::filesystem::is_regular_file(status)) return io_error(file + ": the camera path is not a regular file");
   std::ifstream in(file);
-  if (!in) return io_error(file + ": cannot open camera path");
-  const nlohmann::json doc = nlohmann::json::parse(in, nullptr, false);
-  if (doc.is_discarded()) return bad_input_error(file + ": not valid JSON");
+  if (!in) return io_error(file + ": cannot open camera path: " + std::strerror(errno));
+  nlohmann::json doc;
+  try {
+    doc = nlohmann::json::parse(in);  // its errors give the line and column
+  } catch (const nlohmann::json::exception& e) {
+    return bad_input_error(file + ": not valid JSON: " + json_message(e));
+  }
   std::vector<Key> keys;
   try {
     for (const auto& k : doc.at("keyframes")) keys.push_back({vec(k.at("eye")), vec(k.at("target"))});
   } catch (const nlohmann::json::exception& e) {
     return bad_input_error(file + ": expected {\"keyframes\": [{\"eye\": [x,y,z], \"target\": [x,y,z]}, ...]}: " +
-                           e.what());
+                           json_message(e));
   }
   if (keys.size() < 2) return bad_input_error(file + ": a camera path needs at least two keyframes");
   return keys;
@@ -131,9 +148,6 @@ void write_csv_row(std::ofstream& csv, std::uint32_t frame, const runtime::Frame
 int run_walk(const WalkArgs& args, const CommandContext& context) {
   Result<std::uint64_t> budget = parse_byte_size(args.budget);
   if (!budget.ok()) return report(budget.status());
-  if (args.frames == 0) return report(usage_error("--frames must be at least 1"));
-  if (!(args.fps >= 0.0)) return report(usage_error("--fps must be >= 0 (0: as fast as possible)"));
-  if (args.threads == 0) return report(usage_error("--threads must be at least 1"));
   if (args.frames_png_every == 0) return report(usage_error("--frames-png-every must be at least 1"));
   if (!args.frames_png.empty()) {
     std::error_code error;

@@ -6,6 +6,9 @@
 
 #include <CLI/CLI.hpp>
 
+#include <cmath>
+#include <cstdint>
+#include <cstdlib>
 #include <memory>
 #include <string>
 
@@ -13,6 +16,32 @@
 
 namespace octolod::cli {
 namespace {
+
+// Caps of counts the user gives, so that a typo fails as a usage error instead of exhausting
+// threads or memory: more threads than this gains nothing, and a sample costs time, not memory,
+// beyond 1e9 (hours per direction).
+constexpr unsigned kMaxThreads = 1024;
+constexpr std::uint64_t kMaxSamples = 1'000'000'000;
+
+// A validator of numbers: `message` unless accept(value). Text that is not a number passes, for
+// the option's conversion to report.
+CLI::Validator number_check(bool (*accept)(double), const char* message, const char* description) {
+  return CLI::Validator(
+      [=](const std::string& text) {
+        char* end = nullptr;
+        const double value = std::strtod(text.c_str(), &end);
+        const bool number = end != text.c_str() && *end == '\0';
+        return !number || accept(value) ? std::string() : std::string(message);
+      },
+      description);
+}
+
+// A finite distance > 0 (CLI::PositiveNumber lets NaN through).
+CLI::Validator positive_distance() {
+  return number_check([](double v) { return v > 0.0 && std::isfinite(v); }, "must be a finite distance > 0",
+                      "DISTANCE > 0");
+}
+
 
 // The mutually exclusive --error and --level options of a uniform cut, stored into `choice`
 // (which must outlive the parse); check_cut_choice checks them once parsed.
@@ -53,7 +82,8 @@ void add_bake_command(CLI::App& app, CommandContext& context) {
       ->capture_default_str();
   command->add_option("--work-dir", args->work_dir,
                       "Directory for temporary files (default: next to the output)");
-  command->add_option("--threads", args->threads, "Worker threads (default: all cores)");
+  command->add_option("--threads", args->threads, "Worker threads, up to 1024 (default or 0: all cores)")
+      ->check(CLI::Range(0u, kMaxThreads));
   command
       ->add_option("--method", args->method,
                    "Clustering of the LODs: grid (cells inside each node) or bade2006 (the "
@@ -88,8 +118,9 @@ void add_compare_command(CLI::App& app, CommandContext& context) {
       ->excludes(errors);
   command
       ->add_option("--samples", args->samples,
-                   "Metro samples per direction; 0 = 10 per triangle, 100K..1M")
-      ->capture_default_str();
+                   "Metro samples per direction, up to 1e9; 0 = 10 per triangle, 100K..1M")
+      ->capture_default_str()
+      ->check(CLI::Range(std::uint64_t{0}, kMaxSamples));
   command->add_flag("--markdown", args->markdown, "Print the table as Markdown");
   command->add_flag("--no-reference", args->no_reference,
                     "Skip the reference decimation (the cut columns only; much faster on "
@@ -104,7 +135,7 @@ void add_compare_command(CLI::App& app, CommandContext& context) {
       ->add_option("--picture-scale", args->picture_scale,
                    "Distance (model units) at the red end of the pictures' colour scale, the same "
                    "for every picture (default: each picture's largest)")
-      ->check(CLI::PositiveNumber)
+      ->check(positive_distance())
       ->needs(pictures);
   command->callback([args, &context] { context.exit_code = run_compare(*args, context); });
 }
@@ -119,13 +150,15 @@ void add_eval_command(CLI::App& app, CommandContext& context) {
   command->add_option("b", args->b, "Second mesh (.ply)")->required();
   command
       ->add_option("--samples", args->samples,
-                   "Samples per direction; 0 = 10 per triangle of the sampled mesh, "
+                   "Samples per direction, up to 1e9; 0 = 10 per triangle of the sampled mesh, "
                    "100K..1M")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(CLI::Range(std::uint64_t{0}, kMaxSamples));
   command->add_option("--seed", args->seed, "Sample generator seed (same seed, same numbers)")
       ->capture_default_str();
   command->add_option("--threads", args->threads,
-                      "Query threads (default: all cores; the numbers do not depend on it)");
+                      "Query threads, up to 1024 (default or 0: all cores; the numbers do not depend on it)")
+      ->check(CLI::Range(0u, kMaxThreads));
   CLI::Option* picture = command->add_option(
       "--picture", args->picture,
       "PNG of B coloured by its distance to A next to A coloured by its distance "
@@ -134,7 +167,7 @@ void add_eval_command(CLI::App& app, CommandContext& context) {
       ->add_option("--picture-scale", args->picture_scale,
                    "Distance (model units) at the red end of the picture's colour scale (default: "
                    "its largest)")
-      ->check(CLI::PositiveNumber)
+      ->check(positive_distance())
       ->needs(picture);
   command->callback([args, &context] { context.exit_code = run_eval(*args, context); });
 }
@@ -261,17 +294,24 @@ void add_walk_command(CLI::App& app, CommandContext& context) {
                    "orbit | far-to-near | flythrough | FILE.json ({\"keyframes\": [{\"eye\": [x,y,z], "
                    "\"target\": [x,y,z]}, ...]}, model units)")
       ->capture_default_str();
-  command->add_option("--frames", args->frames, "Frames to replay")->capture_default_str();
+  command->add_option("--frames", args->frames, "Frames to replay, 1..1000000 (each keeps a line of statistics)")
+      ->capture_default_str()
+      ->check(CLI::Range(1u, 1'000'000u));
   command->add_option("--budget", args->budget, "Cache budget: 8M, 512K, 1G")->capture_default_str();
   command->add_option("--sse", args->sse, "Screen-space error target in pixels (1080 px viewport)")
       ->capture_default_str();
   command->add_option("--fps", args->fps,
-                      "Frame rate of the replay; 0 = as fast as possible (the selection's cost: loads then "
+                      "Frame rate of the replay, 1..1000; 0 = as fast as possible (the selection's cost: loads then "
                       "rarely finish in time, and frames draw mostly fallbacks)")
-      ->capture_default_str();
-  command->add_option("--threads", args->threads, "Loader threads")->capture_default_str();
-  command->add_option("--loads-in-flight", args->loads_in_flight, "Loads queued or running at once")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(number_check([](double fps) { return fps == 0.0 || (fps >= 1.0 && fps <= 1000.0); },
+                           "must be 0 or within 1..1000", "0 or 1..1000"));
+  command->add_option("--threads", args->threads, "Loader threads, 1..1024")
+      ->capture_default_str()
+      ->check(CLI::Range(1u, kMaxThreads));
+  command->add_option("--loads-in-flight", args->loads_in_flight, "Loads queued or running at once, 1..4096")
+      ->capture_default_str()
+      ->check(CLI::Range(1u, 4096u));
   command->add_flag("--no-prefetch", args->no_prefetch, "Load only what frames want");
   command->add_option("--csv", args->csv, "Write per-frame statistics to this CSV file");
   command->add_option("--plot", args->plot, "Write per-frame charts to this PNG file");
