@@ -1,4 +1,5 @@
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 
 #include <algorithm>
 #include <fstream>
@@ -116,6 +117,22 @@ TEST(NodeFile, WriteThenReadFromDisk) {
   Result<NodeMesh> missing = read_node_file(path);
   ASSERT_FALSE(missing.ok());
   EXPECT_EQ(missing.status().code(), ErrorCode::io);
+}
+
+// A FIFO (no writer: reading it would block) and a device that never ends (/dev/zero) are not
+// node files: refused at once naming the path, before any read.
+TEST(NodeFile, OnlyRegularFilesAreRead) {
+  const auto fifo = std::filesystem::path(::testing::TempDir()) / "node_file_test_fifo.olod";
+  std::filesystem::remove(fifo);
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  for (const std::filesystem::path& path : {fifo, std::filesystem::path("/dev/zero")}) {
+    Result<NodeMesh> read = read_node_file(path);
+    ASSERT_FALSE(read.ok()) << path;
+    EXPECT_EQ(read.status().code(), ErrorCode::io);
+    EXPECT_NE(read.status().message().find(path.string() + ": not a regular file"), std::string::npos)
+        << read.status().message();
+  }
+  std::filesystem::remove(fifo);
 }
 
 std::vector<char> file_bytes(const std::filesystem::path& path) {

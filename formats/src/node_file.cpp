@@ -7,12 +7,11 @@
 #include <cerrno>
 #include <cstring>
 #include <cmath>
-#include <cstdio>
-#include <fstream>
 #include <string>
 #include <utility>
 
 #include <fcntl.h>
+#include <sys/stat.h>
 #include <unistd.h>
 #include <zlib.h>
 
@@ -286,17 +285,28 @@ Result<std::uint64_t> NodeFileWriter::finish() {
   return f.written;
 }
 
+Result<std::vector<std::byte>> read_node_file_bytes(const std::filesystem::path& path) {
+  // O_NONBLOCK: opening a FIFO without a writer returns at once, and fstat then refuses it
+  UniqueFd fd(::open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NONBLOCK));
+  if (!fd.valid()) return io_error(path.string() + ": cannot open: " + std::strerror(errno));
+  struct stat info {};
+  if (::fstat(fd.get(), &info) != 0) return io_error(path.string() + ": cannot stat: " + std::strerror(errno));
+  if (!S_ISREG(info.st_mode)) return io_error(path.string() + ": not a regular file");
+  std::vector<std::byte> bytes(static_cast<std::size_t>(info.st_size));
+  for (std::size_t done = 0; done < bytes.size();) {
+    const ssize_t n = ::read(fd.get(), bytes.data() + done, bytes.size() - done);
+    if (n < 0 && errno == EINTR) continue;
+    if (n < 0) return io_error(path.string() + ": read failed: " + std::strerror(errno));
+    if (n == 0) return io_error(path.string() + ": ended at byte " + std::to_string(done) + " while being read");
+    done += static_cast<std::size_t>(n);
+  }
+  return bytes;
+}
+
 Result<NodeMesh> read_node_file(const std::filesystem::path& path) {
-  std::FILE* f = std::fopen(path.c_str(), "rb");
-  if (!f) return io_error(path.string() + ": cannot open: " + std::strerror(errno));
-  std::vector<std::byte> bytes;
-  std::array<std::byte, 1 << 16> chunk;
-  std::size_t n;
-  while ((n = std::fread(chunk.data(), 1, chunk.size(), f)) > 0) bytes.insert(bytes.end(), chunk.begin(), chunk.begin() + static_cast<std::ptrdiff_t>(n));
-  bool failed = std::ferror(f) != 0;
-  std::fclose(f);
-  if (failed) return io_error(path.string() + ": read failed");
-  return decode_node_file(bytes, path.string());
+  Result<std::vector<std::byte>> bytes = read_node_file_bytes(path);
+  if (!bytes.ok()) return bytes.status();
+  return decode_node_file(bytes.value(), path.string());
 }
 
 }  // namespace octolod

@@ -1,29 +1,12 @@
 // FileSource and MemorySource: the two NodeSources the runtime ships with.
 #include "octolod/runtime/node_source.h"
 
-#include <cerrno>
-#include <cstdio>
-#include <memory>
-#include <system_error>
+#include "octolod/formats/node_file.h"
 
 namespace octolod::runtime {
 
 Result<std::vector<std::byte>> FileSource::read(std::string_view file) const {
-  const std::filesystem::path path = root_ / std::filesystem::path(file);
-  std::unique_ptr<std::FILE, int (*)(std::FILE*)> f(std::fopen(path.c_str(), "rb"), &std::fclose);
-  if (!f) {
-    return io_error(path.string() + ": cannot open: " +
-                    std::generic_category().message(errno));
-  }
-  std::vector<std::byte> bytes;
-  std::byte chunk[1 << 16];
-  for (;;) {
-    const std::size_t got = std::fread(chunk, 1, sizeof chunk, f.get());
-    bytes.insert(bytes.end(), chunk, chunk + got);
-    if (got < sizeof chunk) break;
-  }
-  if (std::ferror(f.get())) return io_error(path.string() + ": read failed");
-  return bytes;
+  return read_node_file_bytes(root_ / std::filesystem::path(file));
 }
 
 void MemorySource::put(std::string file, std::vector<std::byte> bytes) {

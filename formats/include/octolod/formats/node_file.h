@@ -46,6 +46,11 @@ std::vector<std::byte> encode_node_file(const NodeMesh& mesh);
 Result<NodeMesh> decode_node_file(std::span<const std::byte> bytes, std::string_view name);
 
 Status write_node_file(const std::filesystem::path& path, const NodeMesh& mesh);
+// The bytes of the file at `path`, read whole at the size it has when opened. Errors (io, naming
+// the path): it cannot be opened or read, it is not a regular file (a FIFO would block, a device
+// never end), or it ends before that size.
+Result<std::vector<std::byte>> read_node_file_bytes(const std::filesystem::path& path);
+// decode_node_file of read_node_file_bytes(path).
 Result<NodeMesh> read_node_file(const std::filesystem::path& path);
 
 // Writes a node file piece by piece, for a mesh too large to hold at once (a streamed octree

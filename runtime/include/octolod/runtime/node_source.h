@@ -24,7 +24,9 @@ class NodeSource {
   virtual Result<std::vector<std::byte>> read(std::string_view file) const = 0;
 };
 
-// Reads files below a baked tree's root directory on disk.
+// Reads files below a baked tree's root directory on disk, each in one read
+// (read_node_file_bytes: only regular files, so a FIFO or a device in the tree fails its load
+// instead of blocking a loader thread or filling memory).
 class FileSource final : public NodeSource {
  public:
   explicit FileSource(std::filesystem::path root) : root_(std::move(root)) {}
