@@ -469,6 +469,22 @@ TEST_F(BakeTest, ASecondBakeReplacesTheFirstAtomically) {
   expect_no_temp_files();
 }
 
+// The new tree replaces the whole output directory, so an input inside it is refused before
+// anything is written, and stays where it was with the earlier tree.
+TEST_F(BakeTest, AnInputInsideTheOutputDirectoryIsRefused) {
+  ASSERT_TRUE(bake(options("out")).ok());
+  BakeOptions inside = options("out");
+  inside.input = path("out") / "sub" / ".." / "input.ply";
+  fs::copy_file(options("out").input, path("out") / "input.ply");
+  const auto before = tree_files(path("out"));
+  auto r = bake(inside);
+  ASSERT_EQ(r.status().code(), ErrorCode::usage);
+  EXPECT_NE(r.status().message().find("lies inside the output directory"), std::string::npos) << r.status().message();
+  EXPECT_TRUE(tree_files(path("out")) == before);
+  EXPECT_TRUE(fs::exists(path("out") / "input.ply"));
+  expect_no_temp_files();
+}
+
 // Out of space at any point of a bake whose writes go through the record files (soup, sort
 // runs, a streamed leaf's spill and edges): an io error naming the device's reason, the earlier
 // tree unchanged, no temporary file. `messages` gets the errors.

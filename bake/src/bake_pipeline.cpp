@@ -619,7 +619,14 @@ Status check_options(const BakeOptions& options) {
                        " bytes is below the minimum of " + std::to_string(options.program_bytes + kMinBakeBudget));
   }
   if (options.output.empty()) return usage_error("no output directory given");
-  return check_replaceable(options.output);
+  OCTOLOD_RETURN_IF_ERROR(check_replaceable(options.output));
+  // the published tree replaces the whole output directory: an input inside it would be deleted
+  std::error_code ec;
+  const fs::path input = fs::weakly_canonical(options.input, ec), output = fs::weakly_canonical(options.output, ec);
+  if (!ec && std::mismatch(output.begin(), output.end(), input.begin(), input.end()).first == output.end())
+    return usage_error("input '" + options.input.string() + "' lies inside the output directory '" +
+                       options.output.string() + "', which the bake replaces whole: move it or choose another -o");
+  return {};
 }
 
 // Inputs whose header declares fewer faces than this many leaves of max_tris have their
