@@ -185,7 +185,7 @@ void add_export_command(CLI::App& app, CommandContext& context) {
       "Compress with Draco (KHR_draco_mesh_compression; lossy, see --position-bits)");
   command
       ->add_option("--position-bits", args->draco_options.position_bits,
-                   "Draco position quantization bits (1..30; 0 keeps float positions) over the cut's bounding cube")
+                   "Draco position quantization bits (1..24; 0 keeps float positions) over the cut's bounding cube")
       ->capture_default_str()
       ->needs(draco);
   command->callback([args, &context] {

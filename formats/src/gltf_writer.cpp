@@ -34,9 +34,9 @@ Status check_options(std::span<const NodeMesh> meshes, const GltfWriteOptions& o
                             {d.normal_bits, "normal"},
                             {d.color_bits, "color"},
                             {d.uv_bits, "uv"}})
-    if (bits < 0 || bits > 30)
+    if (bits < 0 || bits > kMaxDracoBits)
       return usage_error(std::string("glTF export: Draco ") + what + " quantization bits " +
-                         std::to_string(bits) + " out of range 0..30");
+                         std::to_string(bits) + " out of range 0.." + std::to_string(kMaxDracoBits));
   if (d.compression_level < 0 || d.compression_level > 10)
     return usage_error("glTF export: Draco compression level " +
                        std::to_string(d.compression_level) + " out of range 0..10");
