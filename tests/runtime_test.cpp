@@ -382,6 +382,27 @@ TEST(Paging, NeededLoadsComeBeforePrefetchesAndHigherPriorityFirst) {
   EXPECT_EQ(loaded, 1u);
 }
 
+// A valid node file that is not the one the manifest describes (LOD 1's bytes under LOD 0's
+// name: the cache budgets by the manifest's counts) fails its load like a corrupt one.
+TEST(Paging, ANodeFileWithOtherCountsThanTheManifestFailsItsLoad) {
+  Fixture fx(3);
+  const std::uint32_t swapped = fx.tree.node_at("7/7");
+  const NodeInfo& node = fx.tree.manifest.nodes[swapped];
+  Result<std::vector<std::byte>> coarser = fx.tree.source->read(node.lods[1].file);
+  ASSERT_TRUE(coarser.ok());
+  fx.tree.source->put(node.lods[0].file, coarser.value());
+
+  const Camera camera = front(100.0f);  // wants every leaf's LOD 0
+  for (int i = 0; i < 30; ++i) {
+    fx.streaming->update(camera);
+    fx.executor->run_pending();
+  }
+  EXPECT_TRUE(fx.streaming->is_bad(swapped, 0));
+  EXPECT_FALSE(fx.streaming->is_bad(swapped, 1));
+  ASSERT_EQ(fx.log.size(), 1u);
+  EXPECT_NE(fx.log[0].find("the manifest says"), std::string::npos) << fx.log[0];
+}
+
 TEST(Paging, CorruptNodeFileIsLoggedOnceAndAnAncestorIsDrawnForever) {
   Fixture fx(3);
   const std::uint32_t broken = fx.tree.node_at("7/7");

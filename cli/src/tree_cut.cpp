@@ -51,8 +51,11 @@ Result<std::vector<NodeMesh>> load_cut(const std::filesystem::path& root, const 
   std::vector<NodeMesh> meshes;
   meshes.reserve(cut.size());
   for (const CutEntry& e : cut) {
-    Result<NodeMesh> mesh = read_node_file(root / manifest.nodes[e.node].lods[e.lod].file);
+    const LodInfo& lod = manifest.nodes[e.node].lods[e.lod];
+    const std::filesystem::path file = root / lod.file;
+    Result<NodeMesh> mesh = read_node_file(file);
     if (!mesh.ok()) return mesh.status();
+    OCTOLOD_RETURN_IF_ERROR(check_node_lod(mesh.value(), lod, manifest.layout, file.string()));
     meshes.push_back(std::move(mesh).value());
   }
   return meshes;
@@ -64,14 +67,7 @@ Result<NodeMesh> load_cut_mesh(const std::filesystem::path& root, const Manifest
   if (!meshes.ok()) return meshes.status();
   std::vector<const NodeMesh*> parts;
   parts.reserve(cut.size());
-  for (std::size_t i = 0; i < cut.size(); ++i) {
-    const NodeMesh& mesh = meshes.value()[i];
-    if (!(mesh.layout == manifest.layout))
-      return bad_input_error(
-          (root / manifest.nodes[cut[i].node].lods[cut[i].lod].file).string() + ": layout " +
-          mesh.layout.describe() + " differs from the manifest's " + manifest.layout.describe());
-    parts.push_back(&mesh);
-  }
+  for (const NodeMesh& mesh : meshes.value()) parts.push_back(&mesh);
   if (parts.empty()) {
     NodeMesh empty;
     empty.layout = manifest.layout;

@@ -34,7 +34,8 @@ struct CutSummary {
 };
 CutSummary summarize_cut(const Manifest& manifest, std::span<const CutEntry> cut);
 
-// Loads every entry's node file from the tree at `root`.
+// Loads every entry's node file from the tree at `root`. Errors: those of read_node_file, and
+// check_node_lod's when a file is not what the manifest says (layout, counts).
 Result<std::vector<NodeMesh>> load_cut(const std::filesystem::path& root, const Manifest& manifest,
                                        std::span<const CutEntry> cut);
 
@@ -42,8 +43,7 @@ Result<std::vector<NodeMesh>> load_cut(const std::filesystem::path& root, const 
 // concatenated, with vertices whose records (position and attributes) are bit-identical welded
 // into one (bake::merge_meshes). A cut is crack-free because neighbouring nodes keep their shared
 // boundary vertices bit-identical, so after welding the seams between nodes are shared vertices.
-// The layout is the manifest's. Errors: those of reading the node files, and bad_input when a
-// node file's layout differs from the manifest's.
+// The layout is the manifest's. Errors: load_cut's.
 Result<NodeMesh> load_cut_mesh(const std::filesystem::path& root, const Manifest& manifest,
                                std::span<const CutEntry> cut);
 

@@ -321,4 +321,16 @@ Result<Manifest> read_manifest(const std::filesystem::path& path) {
   return manifest;
 }
 
+Status check_node_lod(const NodeMesh& mesh, const LodInfo& lod, const VertexLayout& layout, std::string_view name) {
+  if (mesh.layout != layout)
+    return bad_input_error(std::string(name) + ": vertex layout " + mesh.layout.describe() + " differs from the manifest's " +
+                           layout.describe());
+  if (mesh.triangle_count() != lod.triangles || mesh.vertex_count() != lod.vertices)
+    return bad_input_error(std::string(name) + ": holds " + std::to_string(mesh.triangle_count()) + " triangles and " +
+                           std::to_string(mesh.vertex_count()) + " vertices, the manifest says " +
+                           std::to_string(lod.triangles) + " and " + std::to_string(lod.vertices) +
+                           " (a node file from elsewhere, or an edited manifest)");
+  return {};
+}
+
 }  // namespace octolod

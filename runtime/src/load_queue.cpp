@@ -7,8 +7,8 @@
 namespace octolod::runtime {
 
 LoadQueue::LoadQueue(std::shared_ptr<const NodeSource> source, std::shared_ptr<const Manifest> manifest,
-                     std::vector<const std::string*> files, VertexLayout layout)
-    : source_(std::move(source)), manifest_(std::move(manifest)), files_(std::move(files)), layout_(layout) {}
+                     std::vector<const LodInfo*> lods, VertexLayout layout)
+    : source_(std::move(source)), manifest_(std::move(manifest)), lods_(std::move(lods)), layout_(layout) {}
 
 void LoadQueue::take_pending(std::vector<std::uint32_t>& out) {
   out.clear();
@@ -65,7 +65,8 @@ void LoadQueue::run_task() {
 LoadCompletion LoadQueue::load(std::uint32_t slot) const {
   LoadCompletion done;
   done.slot = slot;
-  const std::string& file = *files_[slot];
+  const LodInfo& lod = *lods_[slot];
+  const std::string& file = lod.file;
   Result<std::vector<std::byte>> bytes = source_->read(file);
   if (!bytes.ok()) {
     done.status = bytes.status();
@@ -76,9 +77,8 @@ LoadCompletion LoadQueue::load(std::uint32_t slot) const {
     done.status = mesh.status();
     return done;
   }
-  if (mesh->layout != layout_) {
-    done.status = bad_input_error(file + ": vertex layout " + mesh->layout.describe() +
-                                  " differs from the manifest's " + layout_.describe());
+  if (const Status checked = check_node_lod(mesh.value(), lod, layout_, file); !checked.ok()) {
+    done.status = checked;
     return done;
   }
   done.mesh = std::make_shared<const NodeMesh>(std::move(mesh).value());

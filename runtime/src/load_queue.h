@@ -30,10 +30,10 @@ struct LoadCompletion {
 
 class LoadQueue {
  public:
-  // `*files[slot]` is the file of each slot, a name held by `manifest` (which the queue keeps
-  // alive for its tasks); `layout` the layout every node file must have.
+  // `*lods[slot]` is the LOD of each slot, held by `manifest` (which the queue keeps alive for
+  // its tasks); a loaded node file must be what it says (check_node_lod) in `layout`.
   LoadQueue(std::shared_ptr<const NodeSource> source, std::shared_ptr<const Manifest> manifest,
-            std::vector<const std::string*> files, VertexLayout layout);
+            std::vector<const LodInfo*> lods, VertexLayout layout);
 
   // Render thread. take_pending() removes every request not yet started (into `out`, replacing
   // its content); set_pending() publishes `in` (most important last) and leaves `in` empty.
@@ -55,7 +55,7 @@ class LoadQueue {
 
   const std::shared_ptr<const NodeSource> source_;
   const std::shared_ptr<const Manifest> manifest_;
-  const std::vector<const std::string*> files_;
+  const std::vector<const LodInfo*> lods_;
   const VertexLayout layout_;
 
   std::mutex mutex_;

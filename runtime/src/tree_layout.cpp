@@ -87,7 +87,7 @@ Result<TreeLayout> build_tree_layout(const Manifest& manifest) {
       t.slot_bytes.push_back(decoded_bytes(lod, manifest.layout));
       t.slot_triangles.push_back(lod.triangles);
       t.slot_node.push_back(static_cast<std::uint32_t>(i));
-      t.slot_file.push_back(&lod.file);
+      t.slot_lod.push_back(&lod);
     }
   }
   t.child_coarsest_slot.reserve(t.children.size());

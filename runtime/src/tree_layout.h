@@ -46,9 +46,10 @@ struct TreeLayout {
   std::vector<std::uint64_t> slot_bytes;     // expected decoded NodeMesh bytes
   std::vector<std::uint32_t> slot_triangles;
   std::vector<std::uint32_t> slot_node;      // internal node index
-  // Relative to the tree root: the manifest's LodInfo::file, not copied (a 100M-triangle tree
-  // has 282K of them), so the Manifest the layout was built from must outlive their use.
-  std::vector<const std::string*> slot_file;
+  // The manifest's LodInfo (its file relative to the tree root, its counts), not copied (a
+  // 100M-triangle tree has 282K of them), so the Manifest the layout was built from must outlive
+  // their use.
+  std::vector<const LodInfo*> slot_lod;
   std::vector<std::uint32_t> manifest_to_internal;
   float min_distance = 1e-6f;  // distances are clamped to this (model units)
 

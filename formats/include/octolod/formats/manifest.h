@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "octolod/formats/bounds.h"
+#include "octolod/formats/node_file.h"
 #include "octolod/formats/status.h"
 #include "octolod/formats/vertex_layout.h"
 
@@ -101,5 +102,10 @@ Status write_manifest(const std::filesystem::path& path, const Manifest& header,
 Result<Manifest> read_manifest(const std::filesystem::path& path);
 // read_manifest of the manifest.json at the root of a baked tree (the OUT_DIR of a bake).
 Result<Manifest> read_tree_manifest(const std::filesystem::path& tree_root);
+
+// bad_input naming `name` (the node file) unless `mesh`, loaded from lod.file, is what `lod` of
+// a tree of `layout` says: that layout and lod.triangles / lod.vertices. Catches a node file
+// swapped for another LOD's and an edited manifest, whose counts a runtime budgets memory by.
+Status check_node_lod(const NodeMesh& mesh, const LodInfo& lod, const VertexLayout& layout, std::string_view name);
 
 }  // namespace octolod
