@@ -473,6 +473,14 @@ TEST_F(RenderCli, WalkRefusesHugeCountsAndBadCameraPaths) {
   for (const char* option : {"--frames 4294967295", "--frames 0", "--threads 100000", "--threads 0",
                              "--loads-in-flight 0", "--fps 1e-9", "--fps nan"})
     EXPECT_EQ(octolod(walk + option, dir).exit_code, 1) << option;
+  // outputs with nowhere to go fail before the replay (each file is written whole, after it)
+  EXPECT_EQ(octolod(walk + "--frames 3 --csv " + (dir / "missing" / "w.csv").string(), dir).exit_code, 4);
+  EXPECT_NE(file_text(dir / "stderr.txt").find("does not exist"), std::string::npos) << file_text(dir / "stderr.txt");
+  EXPECT_EQ(octolod(walk + "--frames 3 --plot " + dir.string(), dir).exit_code, 4);
+  EXPECT_NE(file_text(dir / "stderr.txt").find("it is a directory"), std::string::npos) << file_text(dir / "stderr.txt");
+  EXPECT_EQ(octolod(walk + "--frames 3 --csv " + (dir / "w.csv").string(), dir).exit_code, 0);
+  const std::string csv = file_text(dir / "w.csv");
+  EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 4);  // the header and 3 frames
   EXPECT_EQ(octolod(walk + "--frames 3 --path " + dir.string(), dir).exit_code, 4);
   EXPECT_NE(file_text(dir / "stderr.txt").find("not a regular file"), std::string::npos) << file_text(dir / "stderr.txt");
   {

@@ -11,6 +11,7 @@
 #include <filesystem>
 #include <string>
 
+#include "atomic_file.h"
 #include "command.h"
 #include "commands.h"
 #include "error_picture.h"
@@ -55,11 +56,7 @@ Result<double> write_picture(const std::string& path, const NodeMesh& a, const N
 int run_eval(const EvalArgs& args, const CommandContext& context) {
   Progress progress(context);
   if (!args.picture.empty()) {  // before the long work: a picture that has nowhere to go fails now
-    const std::filesystem::path parent = std::filesystem::absolute(args.picture).parent_path();
-    std::error_code ec;
-    if (!std::filesystem::is_directory(parent, ec))
-      return report(io_error(args.picture + ": cannot write the picture: directory " + parent.string() +
-                             " does not exist"));
+    if (const Status usable = check_output_path(args.picture, "the picture"); !usable.ok()) return report(usable);
   }
   Result<MeshFile> a = read_mesh_file(args.a);
   if (!a.ok()) return report(a.status());

@@ -9,6 +9,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 #include <memory>
 #include <string>
 #include <thread>
@@ -16,6 +17,7 @@
 
 #include <glm/glm.hpp>
 
+#include "atomic_file.h"
 #include "command.h"
 #include "commands.h"
 #include "frame_render.h"
@@ -134,7 +136,7 @@ double percentile(std::vector<double> v, double p) {
   return v[std::min(v.size() - 1, static_cast<std::size_t>(p * static_cast<double>(v.size() - 1) + 0.5))];
 }
 
-void write_csv_row(std::ofstream& csv, std::uint32_t frame, const runtime::FrameStats& s) {
+void write_csv_row(std::ostream& csv, std::uint32_t frame, const runtime::FrameStats& s) {
   csv << frame << ',' << s.visited << ',' << s.culled << ',' << s.wanted << ',' << s.drawn_nodes << ','
       << s.drawn_triangles << ',' << s.resident_bytes << ',' << s.reserved_bytes << ','
       << s.loads_issued << ',' << s.loads_completed << ',' << s.loads_cancelled << ',' << s.loads_failed
@@ -149,6 +151,9 @@ int run_walk(const WalkArgs& args, const CommandContext& context) {
   Result<std::uint64_t> budget = parse_byte_size(args.budget);
   if (!budget.ok()) return report(budget.status());
   if (args.frames_png_every == 0) return report(usage_error("--frames-png-every must be at least 1"));
+  for (const auto& [path, what] : {std::pair{args.csv, "the CSV"}, std::pair{args.plot, "the charts"}})
+    if (!path.empty())  // before the replay: an output that has nowhere to go fails now
+      if (const Status usable = check_output_path(path, what); !usable.ok()) return report(usable);
   if (!args.frames_png.empty()) {
     std::error_code error;
     std::filesystem::create_directories(args.frames_png, error);
@@ -171,15 +176,6 @@ int run_walk(const WalkArgs& args, const CommandContext& context) {
   Result<std::vector<runtime::Camera>> cameras = camera_path(args.path, tree.manifest().bounds, args.frames);
   if (!cameras.ok()) return report(cameras.status());
 
-  std::ofstream csv;
-  if (!args.csv.empty()) {
-    csv.open(args.csv);
-    if (!csv) return report(io_error(args.csv + ": cannot create"));
-    csv << "frame,visited,culled,wanted,drawn_nodes,drawn_triangles,resident_bytes,reserved_bytes,"
-           "loads_issued,loads_completed,loads_cancelled,loads_failed,cache_hits,cache_misses,"
-           "second_chance_hits,fallbacks,holes,coarsening,selection_ms,selection_cpu_ms\n";
-  }
-
   // replay at a fixed frame rate: loads progress on the loader threads between frames. Rendering
   // a --frames-png picture pauses the replay clock (the loaders keep running meanwhile, so those
   // frames see more loads completed than a real-time renderer would).
@@ -196,7 +192,6 @@ int run_walk(const WalkArgs& args, const CommandContext& context) {
     }
     const runtime::FrameResult& frame = tree.update(cameras.value()[i]);
     stats.push_back(frame.stats);
-    if (csv.is_open()) write_csv_row(csv, i, stats.back());
     if (!args.frames_png.empty() && i % args.frames_png_every == 0) {
       const auto render_start = std::chrono::steady_clock::now();
       Result<Image> image = painter.paint(frame, cameras.value()[i], kFrameWidth, kFrameHeight);
@@ -213,7 +208,18 @@ int run_walk(const WalkArgs& args, const CommandContext& context) {
   }
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  if (csv.is_open() && !csv.flush()) return report(io_error(args.csv + ": write failed"));
+  if (!args.csv.empty()) {  // whole or not at all, after the replay
+    std::ostringstream csv;
+    csv << "frame,visited,culled,wanted,drawn_nodes,drawn_triangles,resident_bytes,reserved_bytes,"
+           "loads_issued,loads_completed,loads_cancelled,loads_failed,cache_hits,cache_misses,"
+           "second_chance_hits,fallbacks,holes,coarsening,selection_ms,selection_cpu_ms\n";
+    for (std::uint32_t i = 0; i < stats.size(); ++i) write_csv_row(csv, i, stats[i]);
+    const std::string text = std::move(csv).str();
+    const Status written = write_file_atomically(args.csv, "the CSV", [&](std::FILE* file) {
+      return std::fwrite(text.data(), 1, text.size(), file) == text.size();
+    });
+    if (!written.ok()) return report(written);
+  }
 
   // summary
   std::uint64_t max_resident = 0, hits = 0, misses = 0, second_chance = 0, issued = 0, loads = 0,

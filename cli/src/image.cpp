@@ -2,11 +2,9 @@
 
 #include <png.h>
 
-#include <cerrno>
 #include <cstdio>
-#include <cstring>
-#include <string>
-#include <unistd.h>
+
+#include "atomic_file.h"
 
 namespace octolod::cli {
 
@@ -60,19 +58,7 @@ bool encode_png(std::FILE* file, const Image& image) {
 }  // namespace
 
 Status write_png(const std::filesystem::path& path, const Image& image) {
-  std::filesystem::path tmp = path;
-  tmp += ".tmp-" + std::to_string(::getpid());
-  std::FILE* file = std::fopen(tmp.c_str(), "wb");
-  if (!file) return io_error(path.string() + ": cannot create: " + std::strerror(errno));
-  bool ok = encode_png(file, image);
-  ok = (std::fclose(file) == 0) && ok;
-  std::error_code ec;
-  if (ok) std::filesystem::rename(tmp, path, ec);
-  if (!ok || ec) {
-    std::filesystem::remove(tmp, ec);
-    return io_error(path.string() + ": writing the PNG failed");
-  }
-  return {};
+  return write_file_atomically(path, "the PNG", [&](std::FILE* file) { return encode_png(file, image); });
 }
 
 }  // namespace octolod::cli
