@@ -471,7 +471,7 @@ TEST_F(RenderCli, WalkRefusesHugeCountsAndBadCameraPaths) {
   runtime::testing::write_tree(runtime::testing::make_full_octree(2), dir / "tree");
   const std::string walk = "walk " + (dir / "tree").string() + " --fps 0 ";
   for (const char* option : {"--frames 4294967295", "--frames 0", "--threads 100000", "--threads 0",
-                             "--loads-in-flight 0", "--fps 1e-9", "--fps nan"})
+                             "--loads-in-flight 0", "--fps 1e-9", "--fps nan", "--sse 0", "--sse nan", "--budget 0"})
     EXPECT_EQ(octolod(walk + option, dir).exit_code, 1) << option;
   // outputs with nowhere to go fail before the replay (each file is written whole, after it)
   EXPECT_EQ(octolod(walk + "--frames 3 --csv " + (dir / "missing" / "w.csv").string(), dir).exit_code, 4);

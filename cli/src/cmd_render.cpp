@@ -64,6 +64,7 @@ struct LevelCount {
 int run_render(const RenderArgs& args, const CommandContext& context) {
   Result<std::uint64_t> budget = parse_byte_size(args.budget);
   if (!budget.ok()) return report(budget.status());
+  if (budget.value() == 0) return report(usage_error("--budget must be at least one byte"));
   if (args.width < 16 || args.width > 8192 || args.height < 16 || args.height > 8192)
     return report(usage_error("--width and --height must be within 16..8192 pixels"));
   if (!(args.fov_degrees > 1.0 && args.fov_degrees < 179.0))

@@ -150,6 +150,7 @@ void write_csv_row(std::ostream& csv, std::uint32_t frame, const runtime::FrameS
 int run_walk(const WalkArgs& args, const CommandContext& context) {
   Result<std::uint64_t> budget = parse_byte_size(args.budget);
   if (!budget.ok()) return report(budget.status());
+  if (budget.value() == 0) return report(usage_error("--budget must be at least one byte"));
   if (args.frames_png_every == 0) return report(usage_error("--frames-png-every must be at least 1"));
   for (const auto& [path, what] : {std::pair{args.csv, "the CSV"}, std::pair{args.plot, "the charts"}})
     if (!path.empty())  // before the replay: an output that has nowhere to go fails now

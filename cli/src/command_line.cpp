@@ -36,10 +36,9 @@ CLI::Validator number_check(bool (*accept)(double), const char* message, const c
       description);
 }
 
-// A finite distance > 0 (CLI::PositiveNumber lets NaN through).
-CLI::Validator positive_distance() {
-  return number_check([](double v) { return v > 0.0 && std::isfinite(v); }, "must be a finite distance > 0",
-                      "DISTANCE > 0");
+// A finite number > 0 (CLI::PositiveNumber lets NaN through).
+CLI::Validator positive_finite() {
+  return number_check([](double v) { return v > 0.0 && std::isfinite(v); }, "must be finite and > 0", "> 0");
 }
 
 
@@ -135,7 +134,7 @@ void add_compare_command(CLI::App& app, CommandContext& context) {
       ->add_option("--picture-scale", args->picture_scale,
                    "Distance (model units) at the red end of the pictures' colour scale, the same "
                    "for every picture (default: each picture's largest)")
-      ->check(positive_distance())
+      ->check(positive_finite())
       ->needs(pictures);
   command->callback([args, &context] { context.exit_code = run_compare(*args, context); });
 }
@@ -167,7 +166,7 @@ void add_eval_command(CLI::App& app, CommandContext& context) {
       ->add_option("--picture-scale", args->picture_scale,
                    "Distance (model units) at the red end of the picture's colour scale (default: "
                    "its largest)")
-      ->check(positive_distance())
+      ->check(positive_finite())
       ->needs(picture);
   command->callback([args, &context] { context.exit_code = run_eval(*args, context); });
 }
@@ -254,7 +253,8 @@ void add_render_command(CLI::App& app, CommandContext& context) {
   command->add_option("--width", args->width, "Picture width in pixels")->capture_default_str();
   command->add_option("--height", args->height, "Picture height in pixels (the SSE viewport)")->capture_default_str();
   command->add_option("--sse", args->sse, "Screen-space error target in pixels of the picture's height")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(positive_finite());
   command->add_option("--budget", args->budget, "Cache budget: 8M, 512K, 1G")->capture_default_str();
   command->callback([args, &context] { context.exit_code = run_render(*args, context); });
 }
@@ -299,7 +299,8 @@ void add_walk_command(CLI::App& app, CommandContext& context) {
       ->check(CLI::Range(1u, 1'000'000u));
   command->add_option("--budget", args->budget, "Cache budget: 8M, 512K, 1G")->capture_default_str();
   command->add_option("--sse", args->sse, "Screen-space error target in pixels (1080 px viewport)")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(positive_finite());
   command->add_option("--fps", args->fps,
                       "Frame rate of the replay, 1..1000; 0 = as fast as possible (the selection's cost: loads then "
                       "rarely finish in time, and frames draw mostly fallbacks)")
