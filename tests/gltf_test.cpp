@@ -875,6 +875,9 @@ TEST(GltfExport, ReportsUsageAndMissingTreeErrors) {
   EXPECT_EQ(run_cli("export " + dir.path().string() + " -o " + out).first, 1);  // no cut given
   EXPECT_EQ(run_cli("export " + dir.path().string() + " --error 1 --level 2 -o " + out).first, 1);
   EXPECT_EQ(run_cli("export " + dir.path().string() + " --error -1 -o " + out).first, 1);
+  const std::string obj = (dir.path() / "x.obj").string();  // neither .glb nor .gltf
+  EXPECT_EQ(run_cli("export " + dir.path().string() + " --error 1 -o " + obj).first, 1);
+  EXPECT_FALSE(std::filesystem::exists(obj));
   EXPECT_EQ(
       run_cli("export " + dir.path().string() + " --error 1 --position-bits 9 -o " + out).first,
       1);  // quantization without --draco

@@ -670,7 +670,7 @@ Result<BakeReport> run_bake(const BakeOptions& given) {
   const fs::path work_parent = options.work_dir.empty() ? parent : options.work_dir;
   std::uint64_t input_triangles = kUnknownTriangles;
   if (!fs::is_directory(work_parent, ec))
-    return io_error("work directory '" + work_parent.string() + "' does not exist");
+    return io_error("work directory '" + work_parent.string() + "' does not exist or is not a directory");
   {
     // a budget too small for max_tris is refused before any work (the header names the layout),
     // unless the input is too small to fill leaves of max_tris: then its triangles are counted

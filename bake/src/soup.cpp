@@ -516,7 +516,7 @@ Result<SoupResult> build_soup(const std::filesystem::path& ply, const SoupOption
   }
   std::error_code ec;
   if (!options.work_dir.empty() && !std::filesystem::is_directory(options.work_dir, ec)) {
-    return usage_error("work directory '" + options.work_dir.string() + "' does not exist");
+    return usage_error("work directory '" + options.work_dir.string() + "' does not exist or is not a directory");
   }
   const std::size_t io = std::clamp<std::size_t>(
       static_cast<std::size_t>(std::min<std::uint64_t>(options.memory_budget_bytes / 16,

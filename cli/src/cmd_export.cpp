@@ -35,7 +35,7 @@ int run_export(const ExportArgs& args, const CommandContext& context) {
   if (!meshes.ok()) return report(meshes.status());
 
   GltfWriteOptions options;
-  options.binary = std::filesystem::path(args.output).extension() != ".gltf";
+  options.binary = std::filesystem::path(args.output).extension() == ".glb";
   options.draco = args.draco;
   options.draco_options = args.draco_options;
   options.translation = manifest.origin;

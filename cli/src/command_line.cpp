@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdlib>
+#include <filesystem>
 #include <memory>
 #include <string>
 
@@ -34,6 +35,13 @@ CLI::Validator number_check(bool (*accept)(double), const char* message, const c
         return !number || accept(value) ? std::string() : std::string(message);
       },
       description);
+}
+
+// An item of a comma-separated list that is not empty (CLI11 reads "" as 0: "0.1,,0.2" would
+// add a target of 0).
+CLI::Validator non_empty_item() {
+  return CLI::Validator([](const std::string& text) { return text.empty() ? std::string("an empty item") : std::string(); },
+                        "");
 }
 
 // A finite number > 0 (CLI::PositiveNumber lets NaN through).
@@ -107,12 +115,14 @@ void add_compare_command(CLI::App& app, CommandContext& context) {
       command
           ->add_option("--errors", args->errors,
                        "Comma-separated error targets (model units), one uniform cut each")
-          ->delimiter(',');
+          ->delimiter(',')
+          ->check(non_empty_item());
   command
       ->add_option("--fractions", args->fractions,
                    "Without --errors: cuts closest to these fractions of the input's triangles, "
                    "chosen among the tree's stored LOD errors")
       ->delimiter(',')
+      ->check(non_empty_item())
       ->capture_default_str()
       ->excludes(errors);
   command
@@ -178,7 +188,14 @@ void add_export_command(CLI::App& app, CommandContext& context) {
   command->add_option("tree", args->tree, "Baked tree directory (holds manifest.json)")->required();
   add_cut_options(*command, args->cut);
   command->add_option("-o,--output", args->output, "Output file: .glb, or .gltf for embedded JSON")
-      ->required();
+      ->required()
+      ->check(CLI::Validator(
+          [](const std::string& name) {
+            const std::string extension = std::filesystem::path(name).extension().string();
+            return extension == ".glb" || extension == ".gltf" ? std::string()
+                                                               : std::string("must end in .glb or .gltf");
+          },
+          "FILE.glb|FILE.gltf"));
   CLI::Option* draco = command->add_flag(
       "--draco", args->draco,
       "Compress with Draco (KHR_draco_mesh_compression; lossy, see --position-bits)");
