@@ -775,6 +775,23 @@ TEST_F(BakeTest, InterruptedBakeRemovesItsTemporaryFilesAndDiesBySignal) {
   }
 }
 
+// `octolod sample` stages its file the same way: a large sample interrupted leaves neither it
+// nor a temporary behind (it used to leave an 80-97 MB "<output>.tmp-*" file).
+TEST_F(BakeTest, InterruptedSampleLeavesNothingBehind) {
+  ASSERT_NE(cli_path(), nullptr);
+  const pid_t pid = spawn_cli({"sample", "--shape", "rock", "--triangles", "200M", "-o", path("big.ply").string()});
+  wait_for_temp_dir(dir_, pid);
+  std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  ::kill(pid, SIGINT);
+  const int status = wait_status(pid);
+  ASSERT_TRUE(WIFSIGNALED(status)) << "the sample finished before the signal";
+  EXPECT_EQ(WTERMSIG(status), SIGINT);
+  EXPECT_FALSE(fs::exists(path("big.ply")));
+  expect_no_temp_files();
+  for (const auto& entry : fs::directory_iterator(dir_))
+    EXPECT_EQ(entry.path().filename().string().find(".tmp-"), std::string::npos) << entry.path();
+}
+
 void limit_file_size() {
   ::signal(SIGXFSZ, SIG_IGN);  // writes past the limit fail with EFBIG instead of killing
   rlimit limit{256 << 10, 256 << 10};

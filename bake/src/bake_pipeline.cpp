@@ -32,7 +32,7 @@
 #include "peak_rss.h"
 #include "record_file.h"
 #include "streamed_leaf.h"
-#include "temp_dir.h"
+#include "octolod/bake/temp_dir.h"
 #include "tree_paths.h"
 
 namespace octolod::bake {

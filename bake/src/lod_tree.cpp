@@ -25,7 +25,7 @@
 #include "octolod/bake/soup.h"
 #include "octolod/formats/node_file.h"
 #include "streamed_leaf.h"
-#include "temp_dir.h"
+#include "octolod/bake/temp_dir.h"
 #include "tree_paths.h"
 
 namespace octolod::bake {

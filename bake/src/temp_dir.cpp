@@ -1,6 +1,6 @@
 // Temporary directories, stale-directory housekeeping, atomic publication and SIGINT/SIGTERM
 // cleanup of the bake (docs/design.md stage 6), see temp_dir.h.
-#include "temp_dir.h"
+#include "octolod/bake/temp_dir.h"
 
 #include <fcntl.h>
 #include <signal.h>

@@ -9,8 +9,10 @@
 #include <system_error>
 #include <thread>
 
+#include "atomic_file.h"
 #include "command.h"
 #include "commands.h"
+#include "octolod/bake/temp_dir.h"
 #include "octolod/samplegen/sample_generator.h"
 #include "progress.h"
 
@@ -36,13 +38,28 @@ int run_sample(const SampleArgs& args, const CommandContext& context) {
   Result<SampleCounts> counts = sample_counts(spec);
   if (!counts.ok()) return report(counts.status());
 
+  // Written inside a temporary directory next to the output, then renamed into place: SIGINT or
+  // SIGTERM removes it (and a later run one left by a killed process), so a large sample
+  // interrupted leaves nothing behind.
+  if (const Status usable = check_output_path(args.output, "the sample"); !usable.ok()) return report(usable);
+  const std::filesystem::path output = std::filesystem::absolute(args.output);
+  bake::install_signal_cleanup();
+  bake::remove_stale_temp_dirs(output.parent_path());
+  Result<bake::TempDir> staging = bake::TempDir::create(output.parent_path(), "sample");
+  if (!staging.ok()) return report(staging.status());
+  const std::filesystem::path staged = staging->path() / output.filename();
+
   Progress progress(context);
   const auto start = std::chrono::steady_clock::now();
   const Status written = write_sample_ply(
-      spec, args.output, args.ascii ? PlyFormat::ascii : PlyFormat::binary_little_endian,
+      spec, staged, args.ascii ? PlyFormat::ascii : PlyFormat::binary_little_endian,
       [&](std::uint64_t done, std::uint64_t total) { progress.update("sample", done, total); },
       SampleStreamOptions{.threads = std::max(1u, std::thread::hardware_concurrency())});
+  if (bake::cleanup_signal_received()) bake::await_signal_cleanup();
   if (!written.ok()) return report(written);
+  std::error_code renamed;
+  std::filesystem::rename(staged, output, renamed);
+  if (renamed) return report(io_error(args.output + ": cannot write: " + renamed.message()));
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   progress.finish("sample", seconds);

@@ -1,6 +1,6 @@
 // The bake's temporary directories and atomic publication (docs/design.md stage 6: a bake
 // writes to a temporary directory and renames it into place when complete; temporary files
-// never outlive the process).
+// never outlive the process). `octolod sample` stages its output the same way.
 //
 // Every temporary directory is named ".octolod-tmp-<pid>-<n>-<purpose>" so that a later bake
 // can recognise one left behind by a killed process (SIGKILL cannot be caught) and remove it
