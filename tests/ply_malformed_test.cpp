@@ -54,6 +54,8 @@ std::vector<MalformedCase> malformed_cases() {
        "missing 'ply' magic"},
       {"BinaryGarbage", std::string("\x89PNG\r\n\x1a\n", 8), ErrorCode::bad_input, "line 1",
        "missing 'ply' magic, the file starts with '\\x89PNG'"},
+      {"BareCrLineEnds", "ply\rformat ascii 1.0\relement vertex 0\rend_header\r", ErrorCode::bad_input, "line 1",
+       "the header's lines end in a bare CR"},
       {"MissingFormat", "ply\nelement vertex 0\n", ErrorCode::bad_input, "line 2",
        "expected the format line"},
       {"GarbledFormat", "ply\nformat ascii\nend_header\n", ErrorCode::bad_input, "line 2",

@@ -170,6 +170,9 @@ Result<Header> parse_header(FileBuffer& in) {
 
   Result<bool> got = lines.next(line);  // the magic, checked above
   if (!got.ok()) return got.status();
+  if (line.rfind("ply\r", 0) == 0 && line.size() > 4)  // lines split at LF only: "ply\rformat ..."
+    return bad_input_error(message_at_line(
+        path, 1, "the header's lines end in a bare CR (classic Mac OS); PLY lines end in LF or CR LF"));
   if (line != "ply") return error("missing 'ply' magic, the first line is " + quote_text(line));
 
   for (;;) {
