@@ -111,6 +111,12 @@ TEST(Manifest, RejectsMissingKeysWrongTypesAndGarbage) {
   Result<Manifest> r = manifest_from_json(wrong_type, "c");
   ASSERT_FALSE(r.ok());
   EXPECT_EQ(r.status().code(), ErrorCode::bad_input);
+  // the JSON library's messages, without its tags
+  r = manifest_from_json("[]", "d");
+  ASSERT_FALSE(r.ok());
+  EXPECT_NE(r.status().message().find("d: invalid manifest: not a JSON object"), std::string::npos)
+      << r.status().message();
+  EXPECT_EQ(r.status().message().find("json.exception"), std::string::npos) << r.status().message();
 }
 
 // Nodes are converted while the text is parsed (manifest.cpp): a bad one still fails the whole
