@@ -735,6 +735,15 @@ void wait_for_temp_dir(const fs::path& dir, pid_t pid) {
   }
 }
 
+// Sends `sig` to the child `pid` once it has made its temporary directory in `dir` (and a
+// little more), and returns how the child ended.
+int signal_once_started(pid_t pid, const fs::path& dir, int sig) {
+  wait_for_temp_dir(dir, pid);
+  std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  ::kill(pid, sig);
+  return wait_status(pid);
+}
+
 std::vector<std::string> bake_args(const fs::path& in, const fs::path& out, const fs::path& work) {
   return {"bake", in.string(), "-o", out.string(), "--work-dir", work.string(), "--memory", "24M",
           "--max-tris", "500", "--threads", "2"};
@@ -744,10 +753,7 @@ TEST_F(BakeTest, KilledBakeLeavesNothingThatBreaksTheNextRun) {
   ASSERT_NE(cli_path(), nullptr);
   const pid_t pid = spawn_cli(bake_args(large_ply(), path("out"), work()));
   ASSERT_GT(pid, 0);
-  wait_for_temp_dir(work(), pid);
-  std::this_thread::sleep_for(std::chrono::milliseconds(100));
-  ::kill(pid, SIGKILL);
-  const int status = wait_status(pid);
+  const int status = signal_once_started(pid, work(), SIGKILL);
   ASSERT_TRUE(WIFSIGNALED(status)) << "the bake finished before it was killed";
   EXPECT_FALSE(fs::exists(path("out")));
   EXPECT_FALSE(temp_entries(work()).empty()) << "SIGKILL cannot be cleaned up after";
@@ -763,11 +769,7 @@ TEST_F(BakeTest, KilledBakeLeavesNothingThatBreaksTheNextRun) {
 TEST_F(BakeTest, InterruptedBakeRemovesItsTemporaryFilesAndDiesBySignal) {
   ASSERT_NE(cli_path(), nullptr);
   for (const int sig : {SIGINT, SIGTERM}) {
-    const pid_t pid = spawn_cli(bake_args(large_ply(), path("out"), work()));
-    wait_for_temp_dir(work(), pid);
-    std::this_thread::sleep_for(std::chrono::milliseconds(100));
-    ::kill(pid, sig);
-    const int status = wait_status(pid);
+    const int status = signal_once_started(spawn_cli(bake_args(large_ply(), path("out"), work())), work(), sig);
     ASSERT_TRUE(WIFSIGNALED(status)) << "the bake finished before the signal";
     EXPECT_EQ(WTERMSIG(status), sig);
     EXPECT_FALSE(fs::exists(path("out")));
@@ -779,11 +781,8 @@ TEST_F(BakeTest, InterruptedBakeRemovesItsTemporaryFilesAndDiesBySignal) {
 // nor a temporary behind (it used to leave an 80-97 MB "<output>.tmp-*" file).
 TEST_F(BakeTest, InterruptedSampleLeavesNothingBehind) {
   ASSERT_NE(cli_path(), nullptr);
-  const pid_t pid = spawn_cli({"sample", "--shape", "rock", "--triangles", "200M", "-o", path("big.ply").string()});
-  wait_for_temp_dir(dir_, pid);
-  std::this_thread::sleep_for(std::chrono::milliseconds(100));
-  ::kill(pid, SIGINT);
-  const int status = wait_status(pid);
+  const int status = signal_once_started(
+      spawn_cli({"sample", "--shape", "rock", "--triangles", "200M", "-o", path("big.ply").string()}), dir_, SIGINT);
   ASSERT_TRUE(WIFSIGNALED(status)) << "the sample finished before the signal";
   EXPECT_EQ(WTERMSIG(status), SIGINT);
   EXPECT_FALSE(fs::exists(path("big.ply")));
