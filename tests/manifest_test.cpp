@@ -1,4 +1,5 @@
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 
 #include <array>
 #include <fstream>
@@ -237,6 +238,21 @@ TEST(Manifest, WriteIsAtomicAndReadable) {
   for (const auto& entry : std::filesystem::directory_iterator(path.parent_path()))
     EXPECT_EQ(entry.path().string().find("manifest_test.json.tmp"), std::string::npos);
   std::filesystem::remove(path);
+}
+
+// A directory named manifest.json, or a FIFO (reading it would block), is refused by name.
+TEST(Manifest, OnlyARegularFileIsRead) {
+  const auto dir = std::filesystem::path(::testing::TempDir()) / "manifest_test_special";
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir / "manifest.json");
+  ASSERT_EQ(::mkfifo((dir / "fifo.json").c_str(), 0600), 0);
+  for (const char* name : {"manifest.json", "fifo.json"}) {
+    Result<Manifest> read = read_manifest(dir / name);
+    ASSERT_FALSE(read.ok()) << name;
+    EXPECT_EQ(read.status().code(), ErrorCode::io);
+    EXPECT_NE(read.status().message().find("not a regular file"), std::string::npos) << read.status().message();
+  }
+  std::filesystem::remove_all(dir);
 }
 
 // A bake writes its nodes one at a time as it reads them back: the same text as the whole
