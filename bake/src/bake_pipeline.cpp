@@ -621,9 +621,10 @@ Status check_options(const BakeOptions& options) {
   if (options.output.empty()) return usage_error("no output directory given");
   OCTOLOD_RETURN_IF_ERROR(check_replaceable(options.output));
   // the published tree replaces the whole output directory: an input inside it would be deleted
-  std::error_code ec;
-  const fs::path input = fs::weakly_canonical(options.input, ec), output = fs::weakly_canonical(options.output, ec);
-  if (!ec && std::mismatch(output.begin(), output.end(), input.begin(), input.end()).first == output.end())
+  std::error_code input_ec, output_ec;
+  const fs::path input = fs::weakly_canonical(options.input, input_ec);
+  const fs::path output = fs::weakly_canonical(options.output, output_ec);
+  if (!input_ec && !output_ec && std::mismatch(output.begin(), output.end(), input.begin(), input.end()).first == output.end())
     return usage_error("input '" + options.input.string() + "' lies inside the output directory '" +
                        options.output.string() + "', which the bake replaces whole: move it or choose another -o");
   return {};

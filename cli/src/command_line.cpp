@@ -49,7 +49,6 @@ CLI::Validator positive_finite() {
   return number_check([](double v) { return v > 0.0 && std::isfinite(v); }, "must be finite and > 0", "> 0");
 }
 
-
 // The mutually exclusive --error and --level options of a uniform cut, stored into `choice`
 // (which must outlive the parse); check_cut_choice checks them once parsed.
 void add_cut_options(CLI::App& command, CutChoice& choice) {
