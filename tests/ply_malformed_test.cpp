@@ -119,6 +119,9 @@ std::vector<MalformedCase> malformed_cases() {
       {"FloatOverflowCoordinate",
        ascii_mesh("0.000 0.000 0.000\n1.000 0.000 1e39\n0.000 0.000 0.000\n", "3 0 1 2\n"),
        ErrorCode::bad_input, "line 11", "vertex 1 has a non-finite z (Inf)"},
+      {"CoordinateBeyond1e18",
+       ascii_mesh("0.000 0.000 0.000\n1.000 -2e19 0.000\n0.000 0.000 0.000\n", "3 0 1 2\n"),
+       ErrorCode::bad_input, "line 11", "vertex 1 has a y of -2e+19, beyond ±1e18"},
       {"ListCountTwo", ascii_mesh(kGoodVertices, "2 0 1     \n"), ErrorCode::bad_input, "line 13",
        "face 0 has 2 vertices (a polygon needs 3 to 1048576)"},
       {"ListCountZero", ascii_mesh(kGoodVertices, "0         \n"), ErrorCode::bad_input, "line 13",
@@ -238,7 +241,7 @@ TEST(PlyMalformedBinary, ListCountOver2To20) {
   }
 }
 
-TEST(PlyMalformedBinary, NonFiniteCoordinatesNameTheValue) {
+TEST(PlyMalformedBinary, NonFiniteAndHugeCoordinatesNameTheValue) {
   ScratchDir dir;
   for (bool big : {false, true}) {
     const BinaryMesh nan = binary_mesh(big, kFaces, int_list(big, {0, 1, 2}, 3),
@@ -249,6 +252,19 @@ TEST(PlyMalformedBinary, NonFiniteCoordinatesNameTheValue) {
                                        -std::numeric_limits<float>::infinity());
     EXPECT_TRUE(is_error(read_status(dir, inf.bytes), ErrorCode::bad_input,
                          {at(dir, inf.header + 4), "vertex 0 has a non-finite y (Inf)"}));
+  }
+  // A finite float whose squared distances would overflow: in vertex 0 (the generic path, which
+  // sets the origin) and in vertex 1 (the fast path of fixed-size entries).
+  for (bool big : {false, true}) {
+    const BinaryMesh first = binary_mesh(big, kFaces, int_list(big, {0, 1, 2}, 3), 3e38f);
+    EXPECT_TRUE(is_error(read_status(dir, first.bytes), ErrorCode::bad_input,
+                         {at(dir, first.header + 4), "vertex 0 has a y of 3e+38, beyond ±1e18"}));
+    BinaryMesh second = binary_mesh(big, kFaces, int_list(big, {0, 1, 2}, 3));
+    std::string huge;
+    append_scalar(huge, -3e38f, big);
+    second.bytes.replace(second.header + 16, 4, huge);
+    EXPECT_TRUE(is_error(read_status(dir, second.bytes), ErrorCode::bad_input,
+                         {at(dir, second.header + 16), "vertex 1 has a y of -3e+38, beyond ±1e18"}));
   }
   // A finite double too large for a float.
   std::string text = "ply\nformat binary_little_endian 1.0\nelement vertex 1\n"

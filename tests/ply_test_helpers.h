@@ -93,10 +93,11 @@ struct TestMesh {
 };
 
 // A strip of `n` vertices (n >= 3) and n-2 triangles whose values stress exact float text
-// round trips: tiny, huge, subnormal, negative zero, non-terminating decimals. Colours are
-// byte values k/255 when `byte_colors` (what a uchar file can hold), arbitrary otherwise.
+// round trips: tiny, huge (the largest the reader accepts), subnormal, negative zero,
+// non-terminating decimals. Colours are byte values k/255 when `byte_colors` (what a uchar file
+// can hold), arbitrary otherwise.
 inline TestMesh strip_mesh(VertexLayout layout, bool byte_colors, std::uint32_t n = 7) {
-  static constexpr float kSpecial[] = {0.1f, -0.0f, 1e-30f, 1e-40f, 3.0e38f, -2.5f,
+  static constexpr float kSpecial[] = {0.1f, -0.0f, 1e-30f, 1e-40f, kMaxVertexValue, -2.5f,
                                        3.14159265f, 1.0f / 3.0f, 16777216.0f, -7e-12f};
   TestMesh mesh;
   mesh.layout = layout;

@@ -10,6 +10,7 @@
 #include <array>
 #include <bit>
 #include <cmath>
+#include <cstdio>
 #include <initializer_list>
 #include <limits>
 #include <optional>
@@ -380,6 +381,12 @@ class StreamReader final : public PlyReader {
                                      (std::isnan(converted) ? "NaN" : "Inf") +
                                      (std::isfinite(value) ? " after conversion to float" : "") +
                                      ")");
+        if (std::abs(converted) > kMaxVertexValue) {
+          char shown[32];
+          std::snprintf(shown, sizeof(shown), "%g", static_cast<double>(converted));
+          return error_at(where, "vertex " + std::to_string(index_) + " has a " + p.property.name +
+                                     " of " + shown + ", beyond ±1e18 (squared distances that far out overflow float)");
+        }
         vertex[p.slot] = converted;
       }
       OCTOLOD_RETURN_IF_ERROR(source_.end_entry());
@@ -419,7 +426,7 @@ class StreamReader final : public PlyReader {
       float* vertex = vertices_.data() + produced * floats;
       std::size_t good = 0;
       for (; good < n; ++good, entry += stride, vertex += floats) {
-        bool finite = true;
+        bool in_range = true;  // NaN fails the comparison too
         for (std::size_t k = 0; k < kept_count; ++k) {
           const Kept& p = kept[k];
           float value;
@@ -430,14 +437,14 @@ class StreamReader final : public PlyReader {
             value = static_cast<float>(p.divisor != 0.0 ? wide / p.divisor : wide);
           }
           vertex[p.slot] = value;
-          finite &= std::isfinite(value);
+          in_range &= std::abs(value) <= kMaxVertexValue;
         }
-        if (!finite) break;
+        if (!in_range) break;
       }
       in.consume(good * stride);
       produced += good;
       index_ += good;
-      if (good < n) return {};  // a non-finite value: the generic path reports it
+      if (good < n) return {};  // a value out of range: the generic path reports it
     }
     return {};
   }

@@ -27,7 +27,7 @@ Status check_mesh(const NodeMesh& mesh, std::string_view name) {
       if (!std::isfinite(c))
         return bad_input_error(std::string(name) + ": vertex " + std::to_string(v) +
                                " has a non-finite coordinate");
-      if (std::abs(c) > kMaxMeasurableCoordinate) {
+      if (std::abs(c) > kMaxVertexValue) {
         char value[32];
         std::snprintf(value, sizeof(value), "%g", static_cast<double>(c));
         return bad_input_error(std::string(name) + ": vertex " + std::to_string(v) + " has a coordinate of " +

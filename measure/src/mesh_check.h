@@ -9,13 +9,10 @@
 
 namespace octolod::measure {
 
-// Coordinates beyond this (model units) are refused: the measuring functions compute squared
-// distances in float, and between points this far out those would overflow to infinity.
-inline constexpr float kMaxMeasurableCoordinate = 1e18f;
-
 // bad_input, naming `name`, when the vertex floats are not a multiple of the layout, the indices
 // not a multiple of 3 or one is out of range, or a position is NaN/Inf or beyond
-// ±kMaxMeasurableCoordinate. An empty mesh is fine.
+// ±kMaxVertexValue (vertex_layout.h: the measuring functions compute squared distances in
+// float, which would overflow to infinity between points that far out). An empty mesh is fine.
 Status check_mesh(const NodeMesh& mesh, std::string_view name);
 
 }  // namespace octolod::measure

@@ -13,9 +13,9 @@
 //
 // Errors (Status bad_input unless noted) name the file and the line (ascii) or byte offset
 // (binary): truncation, bad magic/format line, unknown types, counts the file cannot hold, face
-// lists with < 3 or > 2^20 entries, indices negative or >= vertex count, NaN/Inf coordinates,
-// a header over 1 MiB or without end_header, declared elements missing. Vertex counts >= 2^32
-// are `unsupported` (indices are 32-bit).
+// lists with < 3 or > 2^20 entries, indices negative or >= vertex count, NaN/Inf or values
+// beyond ±kMaxVertexValue (1e18, vertex_layout.h), a header over 1 MiB or without end_header,
+// declared elements missing. Vertex counts >= 2^32 are `unsupported` (indices are 32-bit).
 //
 // Details of the contract:
 // - Declared counts are checked against the file size in open(), before anything is allocated
@@ -23,8 +23,9 @@
 // - Colours of an integer type are divided by the type's maximum (uchar c -> float(c / 255.0)),
 //   float/double colours are kept as they are; info().color_type is float32 when `red` is a
 //   float type, else uchar. An incomplete group (nx without nz, u without v) is skipped.
-// - NaN/Inf is rejected in every kept attribute (also after double -> float conversion), not
-//   only in positions, so downstream quadrics never see it.
+// - NaN/Inf and magnitudes beyond kMaxVertexValue are rejected in every kept attribute (also
+//   after double -> float conversion; positions after the origin is subtracted), not only in
+//   positions, so downstream quadrics and distances never overflow.
 // - ascii: every element entry is on a line of its own (blank lines between entries are fine);
 //   only whitespace may follow the last element. binary: trailing bytes are ignored.
 // - Element entries are counted from 0 in messages ("face 3 of 10" is the fourth face).

@@ -11,6 +11,12 @@
 
 namespace octolod {
 
+// The largest magnitude of a vertex float that octolod reads (PLY) or measures; for positions,
+// model units after the PLY reader's origin is subtracted. Differences of two such values
+// squared stay finite in float (4e36 < 3.4e38), which the simplifier's and the measures' float
+// distances rely on: a vertex at 3e38 made both produce points far outside the model.
+inline constexpr float kMaxVertexValue = 1e18f;
+
 struct VertexLayout {
   bool normal = false;
   bool color = false;
