@@ -650,18 +650,23 @@ TEST_F(BakeTest, ASmallInputIsBudgetedForItsOwnSize) {
             manifest_to_json(without_run_details(written_manifest(path("large"), reference.value()))));
 }
 
-TEST_F(BakeTest, EmptyMeshBakesToARootWithoutLods) {
-  std::ofstream(path("empty.ply")) << "ply\nformat ascii 1.0\nelement vertex 0\nproperty float x\n"
+TEST_F(BakeTest, AMeshWithoutTrianglesIsRefusedAndTheEarlierTreeKept) {
+  // Such a tree would be refused by every command that reads trees, and would have replaced
+  // the good one.
+  ASSERT_TRUE(bake(options("out")).ok());
+  const auto before = tree_files(path("out"));
+  std::ofstream(path("empty.ply")) << "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\n"
                                       "property float y\nproperty float z\nelement face 0\n"
-                                      "property list uchar int vertex_indices\nend_header\n";
+                                      "property list uchar int vertex_indices\nend_header\n0 0 0\n";
   BakeOptions o = options("out");
   o.input = path("empty.ply");
   auto r = bake(o);
-  ASSERT_TRUE(r.ok()) << r.status().message();
-  auto m = read_manifest(path("out") / "manifest.json");
-  ASSERT_TRUE(m.ok()) << m.status().message();
-  ASSERT_EQ(m->nodes.size(), 1u);
-  EXPECT_TRUE(m->nodes[0].lods.empty());
+  ASSERT_EQ(r.status().code(), ErrorCode::bad_input);
+  EXPECT_NE(r.status().message().find("empty.ply: the mesh has no triangles (1 vertices, 0 faces)"),
+            std::string::npos)
+      << r.status().message();
+  EXPECT_TRUE(tree_files(path("out")) == before);
+  expect_no_temp_files();
 }
 
 TEST_F(BakeTest, EveryFaceTwiceSimplifiesLikeEveryFaceOnce) {

@@ -557,10 +557,6 @@ Result<Manifest> manifest_header(const BakeOptions& options, unsigned threads,
   m.parameters.memory_budget_bytes = options.memory_budget_bytes + options.program_bytes;
   m.parameters.threads = threads;
   m.parameters.method = options.lods ? std::string(method_name(options.method)) : "";
-  if (octree.nodes.empty()) {
-    m.bounds = soup.bounds;
-    return m;
-  }
   auto root = octree.lods->read(0);
   if (!root.ok()) return root.status();
   m.bounds = root->lods.bounds;  // the subtree's: the whole model's
@@ -570,10 +566,6 @@ Result<Manifest> manifest_header(const BakeOptions& options, unsigned threads,
 // Node `index` of the manifest, from its record in the LOD log.
 Result<NodeInfo> manifest_node(const OctreeResult& octree, std::size_t index) {
   NodeInfo n;
-  if (octree.nodes.empty()) {  // no triangles: a root leaf without LODs
-    n.cell = octree.cube.cell(0, 0);
-    return n;
-  }
   auto logged = octree.lods->read(static_cast<std::int32_t>(index));
   if (!logged.ok()) return logged.status();
   const NodeShape& shape = logged->shape;
@@ -597,8 +589,7 @@ Result<NodeInfo> manifest_node(const OctreeResult& octree, std::size_t index) {
 // never held together) and counts the report's LODs and bytes.
 Status write_bake_manifest(const fs::path& path, const Manifest& header,
                            const OctreeResult& octree, BakeReport& report) {
-  const std::size_t count = std::max<std::size_t>(octree.nodes.size(), 1);
-  return write_manifest(path, header, count, [&](std::size_t i) -> Result<NodeInfo> {
+  return write_manifest(path, header, octree.nodes.size(), [&](std::size_t i) -> Result<NodeInfo> {
     Result<NodeInfo> n = manifest_node(octree, i);
     if (!n.ok()) return n;
     report.lods += n->lods.size();
@@ -681,6 +672,11 @@ Result<BakeReport> run_bake(const BakeOptions& given) {
     auto reader = PlyReader::open(options.input, header_only);
     if (!reader.ok()) return reader.status();
     const PlyInfo& info = reader.value()->info();
+    // every face gives at least one triangle; a tree without any is refused by every reader of
+    // trees, and would replace a good tree in the output directory
+    if (info.face_count == 0)
+      return bad_input_error(options.input.string() + ": the mesh has no triangles (" +
+                             std::to_string(info.vertex_count) + " vertices, 0 faces): nothing to bake");
     auto budget = divide_octree_budget(options, info.layout, lod_workers(threads), kUnknownTriangles);
     if (!budget.ok() && info.face_count < kSmallInputLeaves * std::uint64_t{options.max_tris}) {
       auto triangles = count_triangles(options.input);
@@ -763,7 +759,7 @@ Result<BakeReport> run_bake(const BakeOptions& given) {
     manifest.stats["octree_sort_merge_passes"] = octree->sort.merge_passes;
     manifest.stats["soup_streamed_to_sort"] = octree->soup_streamed ? 1 : 0;
     report.nodes = std::max<std::size_t>(octree->nodes.size(), 1);
-    report.leaves = octree->nodes.empty() ? 1 : octree->lod_stats.leaves;
+    report.leaves = octree->lod_stats.leaves;
     report.depth = octree->lod_stats.depth;
     manifest.stats["nodes"] = static_cast<double>(report.nodes);
     manifest.stats["leaves"] = static_cast<double>(report.leaves);
