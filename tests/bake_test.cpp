@@ -608,6 +608,33 @@ TEST_F(BakeTest, ATooSmallBudgetNamesTheBudgetThatSuffices) {
   EXPECT_TRUE(bake(o).ok());
 }
 
+// Every node thread takes kNodeThreadBytes of the budget. A count the caller asks for that the
+// budget cannot hold is refused by name; the machine's count (threads 0) gives way to the
+// budget instead: where 2 threads are refused, it bakes on 1.
+TEST_F(BakeTest, NodeThreadsTakeTheirShareOfTheBudget) {
+  BakeOptions o = options("out");
+  o.threads = 1000;
+  auto refused = bake(o);
+  EXPECT_NE(refused.status().message().find("on 1000 threads"), std::string::npos) << refused.status().message();
+  EXPECT_GT(needed_mib(refused), 24u);
+  EXPECT_FALSE(fs::exists(path("out")));
+
+  // the smallest budget that 2 threads pass, to 16 KiB (refusals come before any work)
+  o.threads = 2;
+  std::uint64_t refused_at = 8 << 20, passes_at = 24 << 20;
+  while (passes_at - refused_at > (16 << 10)) {
+    o.memory_budget_bytes = (refused_at + passes_at) / 2 / 1024 * 1024;
+    (bake(o).ok() ? passes_at : refused_at) = o.memory_budget_bytes;
+  }
+  o.memory_budget_bytes = refused_at;
+  ASSERT_EQ(bake(o).status().code(), ErrorCode::usage);
+  o.threads = 0;
+  auto automatic = bake(o);
+  ASSERT_TRUE(automatic.ok()) << automatic.status().message();
+  EXPECT_EQ(written_manifest(path("out"), automatic.value()).parameters.threads, 1u);
+  expect_no_temp_files();
+}
+
 // An input smaller than max_tris is one leaf of its own size: the budget is divided for its
 // triangles (counted, as the header's faces may be polygons), not for a leaf of max_tris (which
 // would need 1.8 GiB at max_tris 100000). Refused, the message names the input's size and the

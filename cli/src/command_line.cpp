@@ -88,7 +88,9 @@ void add_bake_command(CLI::App& app, CommandContext& context) {
       ->capture_default_str();
   command->add_option("--work-dir", args->work_dir,
                       "Directory for temporary files (default: next to the output)");
-  command->add_option("--threads", args->threads, "Worker threads, up to 1024 (default or 0: all cores)")
+  command->add_option("--threads", args->threads,
+                      "Worker threads, up to 1024; each node thread takes 128 KiB of --memory (default or 0: all "
+                      "cores, fewer if the budget cannot hold them)")
       ->check(CLI::Range(0u, kMaxThreads));
   command
       ->add_option("--method", args->method,

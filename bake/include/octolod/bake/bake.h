@@ -100,8 +100,10 @@ struct BakeOptions {
   // Where the temporary files go (inside a fresh ".octolod-tmp-*" directory); empty: next to
   // the output. Needs room for about two soups (3 x vertex bytes + 4 per triangle, twice).
   std::filesystem::path work_dir;
-  // Threads for the sorts and the node work; 0 = hardware concurrency. The output does not
-  // depend on it.
+  // Threads for the sorts and the node work; 0 = hardware concurrency, or fewer when the memory
+  // budget cannot hold that many node threads (each reserves 128 KiB; the manifest records the
+  // count used). A count given here that the budget cannot hold is refused (usage). The output
+  // does not depend on it.
   unsigned threads = 0;
   // Take the soup stage's out-of-core path even when the vertices would fit (tests, benchmarks).
   bool force_out_of_core = false;
@@ -163,10 +165,11 @@ struct BakeReport {
 };
 
 // Bakes options.input into options.output (see the top of this file). Errors: usage for bad
-// options (max_tris 0, max_depth > 21, budget below kMinBakeBudget or too small for max_tris,
-// an output that is a file or a non-empty foreign directory), the PLY reader's bad_input /
-// unsupported / io naming the file, io for any refused write (out of space included) naming
-// the path. On error nothing is published and every temporary file is gone.
+// options (max_tris 0, max_depth > 21, budget below kMinBakeBudget or too small for max_tris
+// and the threads, an output that is a file or a non-empty foreign directory, an input inside
+// it), bad_input for an input without faces, the PLY reader's bad_input / unsupported / io
+// naming the file, io for any refused write (out of space included) naming the path. On error
+// nothing is published and every temporary file is gone.
 Result<BakeReport> bake(const BakeOptions& options);
 
 }  // namespace octolod::bake
