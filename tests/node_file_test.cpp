@@ -2,6 +2,7 @@
 #include <sys/stat.h>
 
 #include <algorithm>
+#include <cstring>
 #include <fstream>
 #include <iterator>
 
@@ -98,6 +99,32 @@ TEST(NodeFile, RejectsHugeDeclaredCountsWithoutAllocating) {
   Result<NodeMesh> r = decode_node_file(bytes, "huge");
   ASSERT_FALSE(r.ok());
   EXPECT_EQ(r.status().code(), ErrorCode::bad_input);
+}
+
+// `bytes` with `value` stored at `offset` and the checksum made right again: what a writer that
+// gets the header wrong produces, which only the header checks catch.
+std::vector<std::byte> with_field(std::vector<std::byte> bytes, std::size_t offset, auto value) {
+  std::memcpy(bytes.data() + offset, &value, sizeof(value));
+  const std::uint32_t crc = crc32(std::span(bytes).first(bytes.size() - 4));
+  std::memcpy(bytes.data() + bytes.size() - 4, &crc, 4);
+  return bytes;
+}
+
+TEST(NodeFile, RejectsAReservedFieldOrBoundsThatDisagreeWithTheVertices) {
+  const std::vector<std::byte> good = encode_node_file(quad_mesh({true, true, true}));
+  ASSERT_TRUE(decode_node_file(with_field(good, 28, std::uint32_t{0}), "good").ok());
+  Result<NodeMesh> reserved = decode_node_file(with_field(good, 28, std::uint32_t{7}), "r.olod");
+  EXPECT_EQ(reserved.status().code(), ErrorCode::bad_input);
+  EXPECT_NE(reserved.status().message().find("r.olod: byte offset 28: reserved field is 7, not 0"),
+            std::string::npos) << reserved.status().message();
+  // max y 0.5 leaves out vertices 2 and 3 (y 1); the stride is 11 floats
+  Result<NodeMesh> bounds = decode_node_file(with_field(good, 48, 0.5f), "b.olod");
+  EXPECT_EQ(bounds.status().code(), ErrorCode::bad_input);
+  EXPECT_NE(bounds.status().message().find("b.olod: byte offset " + std::to_string(kNodeFileHeaderBytes + (2 * 11 + 1) * 4) +
+                                               ": vertex 2 lies outside the header's bounds"),
+            std::string::npos) << bounds.status().message();
+  // a min above the max holds no vertex
+  EXPECT_FALSE(decode_node_file(with_field(good, 32, 2.0f), "inverted").ok());
 }
 
 TEST(NodeFile, Crc32MatchesTheStandardCheckValue) {

@@ -111,6 +111,8 @@ Result<NodeMesh> decode_node_file(std::span<const std::byte> bytes, std::string_
   const auto index_count = detail::load_le<std::uint32_t>(bytes, 20);
   const auto index_bytes = detail::load_le<std::uint32_t>(bytes, 24);
   if (index_count % 3 != 0) return corrupt(name, 20, "index count not a multiple of 3");
+  if (const auto reserved = detail::load_le<std::uint32_t>(bytes, 28); reserved != 0)
+    return corrupt(name, 28, "reserved field is " + std::to_string(reserved) + ", not 0");
   if (index_bytes != index_bytes_for(vertex_count))
     return corrupt(name, 24, "index size " + std::to_string(index_bytes) + " does not match vertex count");
   NodeMesh mesh;
@@ -131,6 +133,17 @@ Result<NodeMesh> decode_node_file(std::span<const std::byte> bytes, std::string_
   for (std::size_t i = 0; i < mesh.vertices.size(); ++i)
     if (!std::isfinite(mesh.vertices[i]))
       return corrupt(name, kNodeFileHeaderBytes + i * 4, "non-finite vertex value");
+  // the header's bounds hold every position (readers may cull or quantize by them unread)
+  const std::size_t stride = mesh.layout.floats();
+  for (std::size_t k = 0; k < 3; ++k) {
+    const float low = detail::load_le<float>(bytes, 32 + 4 * k), high = detail::load_le<float>(bytes, 44 + 4 * k);
+    for (std::size_t v = 0; v < vertex_count; ++v) {
+      const float c = mesh.vertices[v * stride + k];
+      if (!(c >= low && c <= high))
+        return corrupt(name, kNodeFileHeaderBytes + (v * stride + k) * 4,
+                       "vertex " + std::to_string(v) + " lies outside the header's bounds");
+    }
+  }
   mesh.indices.resize(index_count);
   const std::size_t index_offset = kNodeFileHeaderBytes + mesh.vertices.size() * 4;
   for (std::size_t i = 0; i < index_count; ++i) {

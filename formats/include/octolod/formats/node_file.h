@@ -42,7 +42,10 @@ inline constexpr std::size_t kNodeFileHeaderBytes = 56;
 // Serialized size of `mesh`, for budgeting before encoding.
 std::size_t node_file_size(const NodeMesh& mesh);
 std::vector<std::byte> encode_node_file(const NodeMesh& mesh);
-// `name` is used in error messages (usually the file path).
+// `name` is used in error messages (usually the file path), with the byte offset. Errors:
+// bad_input for a wrong magic, mask, size, reserved field (not 0), checksum, a non-finite vertex
+// float, a position outside the header's bounds or an index out of range; unsupported for
+// another version.
 Result<NodeMesh> decode_node_file(std::span<const std::byte> bytes, std::string_view name);
 
 Status write_node_file(const std::filesystem::path& path, const NodeMesh& mesh);
