@@ -3,6 +3,7 @@
 #include "octolod/formats/gltf.h"
 
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <tiny_gltf.h>
 #include <unistd.h>
@@ -711,6 +712,15 @@ TEST(Gltf, FileErrorsNameTheFile) {
   ASSERT_FALSE(s.ok());
   EXPECT_EQ(s.code(), ErrorCode::io);
   EXPECT_NE(s.message().find(missing_dir.string()), std::string::npos) << s.message();
+
+  const std::filesystem::path fifo = dir.path() / "fifo.glb";
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  const Status special = write_gltf(fifo, std::span(&mesh, 1), {});
+  EXPECT_EQ(special.code(), ErrorCode::io);
+  EXPECT_NE(special.message().find(fifo.string() + ": cannot write the glTF: it is not a regular file"),
+            std::string::npos) << special.message();
+  EXPECT_TRUE(std::filesystem::is_fifo(fifo));
+  std::filesystem::remove(fifo);
 
   NodeMesh bad = quad_mesh({});
   bad.indices[0] = 9;

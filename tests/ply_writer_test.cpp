@@ -3,11 +3,13 @@
 // failures (a full disk, simulated with RLIMIT_FSIZE) as io errors naming the file.
 #include <gtest/gtest.h>
 #include <sys/resource.h>
+#include <sys/stat.h>
 
 #include <algorithm>
 #include <array>
 #include <csignal>
 #include <cstdlib>
+#include <filesystem>
 #include <string>
 #include <vector>
 
@@ -195,7 +197,25 @@ TEST(PlyWriter, UnwritableDirectoryIsAnIoError) {
   const auto path = dir.file("missing") / "mesh.ply";
   auto writer = PlyWriter::create(path, {}, 0, 0);
   EXPECT_TRUE(is_error(test::status_of(writer), ErrorCode::io,
-                       {path.string(), "cannot create temporary file"}));
+                       {path.string(), "cannot write the PLY: directory", "does not exist"}));
+}
+
+// Publishing renames over the path: over a FIFO or a device (/dev/null, as root) that would
+// replace the node itself. Such outputs, a directory and a symlink to a FIFO are refused and kept.
+TEST(PlyWriter, AnOutputThatIsNotARegularFileIsRefusedAndKept) {
+  ScratchDir dir;
+  const auto fifo = dir.file("fifo.ply"), link = dir.file("link.ply"), sub = dir.file("sub.ply");
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  std::filesystem::create_symlink(fifo, link);
+  std::filesystem::create_directory(sub);
+  for (const auto& path : {fifo, link})
+    EXPECT_TRUE(is_error(test::status_of(PlyWriter::create(path, {}, 0, 0)), ErrorCode::io,
+                         {path.string(), "cannot write the PLY: it is not a regular file"}));
+  EXPECT_TRUE(is_error(test::status_of(PlyWriter::create(sub, {}, 0, 0)), ErrorCode::io,
+                       {sub.string(), "it is a directory"}));
+  EXPECT_TRUE(std::filesystem::is_fifo(fifo));
+  EXPECT_TRUE(std::filesystem::is_symlink(link));
+  EXPECT_EQ(directory_entries(dir.path()), (std::vector<std::string>{"fifo.ply", "link.ply", "sub.ply"}));
 }
 
 // A full disk, simulated by a file size limit in a child process: the write fails with EFBIG

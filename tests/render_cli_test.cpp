@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <png.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -389,6 +390,20 @@ TEST_F(RenderCli, MalformedCameraIsAUsageErrorAndWritesNothing) {
   }
   EXPECT_EQ(octolod("render " + (dir / "missing").string() + " -o " + png.string(), dir).exit_code, 4);
   EXPECT_FALSE(std::filesystem::exists(png));
+  std::filesystem::remove_all(dir);
+}
+
+// Pictures are published by renaming over their path: a FIFO (or a device) there is refused
+// and kept, not replaced by a regular file.
+TEST_F(RenderCli, AnOutputThatIsNotARegularFileIsRefusedAndKept) {
+  const auto dir = scratch_dir("fifo");
+  runtime::testing::write_tree(runtime::testing::make_full_octree(2), dir / "tree");
+  const auto fifo = dir / "frame.png";
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  EXPECT_EQ(octolod("render " + (dir / "tree").string() + " -o " + fifo.string(), dir).exit_code, 4);
+  EXPECT_TRUE(std::filesystem::is_fifo(fifo));
+  const std::string errors = file_text(dir / "stderr.txt");
+  EXPECT_NE(errors.find("frame.png: cannot write the PNG: it is not a regular file"), std::string::npos) << errors;
   std::filesystem::remove_all(dir);
 }
 

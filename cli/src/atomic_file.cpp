@@ -10,19 +10,9 @@
 
 namespace octolod::cli {
 
-Status check_output_path(const std::filesystem::path& path, std::string_view what) {
-  const std::filesystem::path parent = std::filesystem::absolute(path).parent_path();
-  std::error_code ec;
-  if (!std::filesystem::is_directory(parent, ec))
-    return io_error(path.string() + ": cannot write " + std::string(what) + ": directory " + parent.string() +
-                    " does not exist");
-  if (std::filesystem::is_directory(path, ec))
-    return io_error(path.string() + ": cannot write " + std::string(what) + ": it is a directory");
-  return {};
-}
-
 Status write_file_atomically(const std::filesystem::path& path, std::string_view what,
                              const std::function<bool(std::FILE*)>& write) {
+  OCTOLOD_RETURN_IF_ERROR(check_output_file(path, what));
   std::filesystem::path tmp = path;
   tmp += ".tmp-" + std::to_string(::getpid());
   std::FILE* file = std::fopen(tmp.c_str(), "wb");

@@ -8,17 +8,15 @@
 #include <functional>
 #include <string_view>
 
+#include "octolod/formats/output_file.h"
 #include "octolod/formats/status.h"
 
 namespace octolod::cli {
 
-// For a command to call before its long work: io_error naming `path` when write_file_atomically
-// could not put `what` there (its directory does not exist, or `path` is a directory).
-Status check_output_path(const std::filesystem::path& path, std::string_view what);
-
 // Calls write(file) on the open temporary sibling; false from it (or a failed close or rename)
 // removes the temporary and returns io_error naming `path`, what was written (`what`, e.g. "the
-// PNG") and errno's reason.
+// PNG") and errno's reason. First check_output_file (output_file.h), which a command also calls
+// before its long work.
 Status write_file_atomically(const std::filesystem::path& path, std::string_view what,
                              const std::function<bool(std::FILE*)>& write);
 

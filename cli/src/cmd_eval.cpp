@@ -11,12 +11,12 @@
 #include <filesystem>
 #include <string>
 
-#include "atomic_file.h"
 #include "command.h"
 #include "commands.h"
 #include "error_picture.h"
 #include "mesh_file.h"
 #include "metro_json.h"
+#include "octolod/formats/output_file.h"
 #include "octolod/measure/metro.h"
 #include "progress.h"
 
@@ -56,7 +56,7 @@ Result<double> write_picture(const std::string& path, const NodeMesh& a, const N
 int run_eval(const EvalArgs& args, const CommandContext& context) {
   Progress progress(context);
   if (!args.picture.empty()) {  // before the long work: a picture that has nowhere to go fails now
-    if (const Status usable = check_output_path(args.picture, "the picture"); !usable.ok()) return report(usable);
+    if (const Status usable = check_output_file(args.picture, "the picture"); !usable.ok()) return report(usable);
   }
   Result<MeshFile> a = read_mesh_file(args.a);
   if (!a.ok()) return report(a.status());

@@ -9,10 +9,10 @@
 #include <system_error>
 #include <thread>
 
-#include "atomic_file.h"
 #include "command.h"
 #include "commands.h"
 #include "octolod/bake/temp_dir.h"
+#include "octolod/formats/output_file.h"
 #include "octolod/samplegen/sample_generator.h"
 #include "progress.h"
 
@@ -41,7 +41,7 @@ int run_sample(const SampleArgs& args, const CommandContext& context) {
   // Written inside a temporary directory next to the output, then renamed into place: SIGINT or
   // SIGTERM removes it (and a later run one left by a killed process), so a large sample
   // interrupted leaves nothing behind.
-  if (const Status usable = check_output_path(args.output, "the sample"); !usable.ok()) return report(usable);
+  if (const Status usable = check_output_file(args.output, "the sample"); !usable.ok()) return report(usable);
   const std::filesystem::path output = std::filesystem::absolute(args.output);
   bake::install_signal_cleanup();
   bake::remove_stale_temp_dirs(output.parent_path());

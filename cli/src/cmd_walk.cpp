@@ -154,7 +154,7 @@ int run_walk(const WalkArgs& args, const CommandContext& context) {
   if (args.frames_png_every == 0) return report(usage_error("--frames-png-every must be at least 1"));
   for (const auto& [path, what] : {std::pair{args.csv, "the CSV"}, std::pair{args.plot, "the charts"}})
     if (!path.empty())  // before the replay: an output that has nowhere to go fails now
-      if (const Status usable = check_output_path(path, what); !usable.ok()) return report(usable);
+      if (const Status usable = check_output_file(path, what); !usable.ok()) return report(usable);
   if (!args.frames_png.empty()) {
     std::error_code error;
     std::filesystem::create_directories(args.frames_png, error);

@@ -32,10 +32,16 @@ std::uint32_t Image::get(int x, int y) const {
 
 namespace {
 
+// libpng's default handlers print their own line ("libpng error: Write Error") before ours,
+// which names the file and errno's reason (write_file_atomically): these only jump back.
+[[noreturn]] void jump_on_png_error(png_structp png, png_const_charp) { png_longjmp(png, 1); }
+void ignore_png_warning(png_structp, png_const_charp) {}
+
 // libpng reports failures by longjmp: keep the setjmp frame free of objects with destructors and
 // of locals modified after setjmp.
 bool encode_png(std::FILE* file, const Image& image) {
-  png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, nullptr, nullptr, nullptr);
+  png_structp png =
+      png_create_write_struct(PNG_LIBPNG_VER_STRING, nullptr, jump_on_png_error, ignore_png_warning);
   if (!png) return false;
   png_infop info = png_create_info_struct(png);
   if (!info || setjmp(png_jmpbuf(png)) != 0) {

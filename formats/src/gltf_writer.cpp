@@ -16,6 +16,7 @@
 
 #include "draco_codec.h"
 #include "octolod/formats/gltf.h"
+#include "octolod/formats/output_file.h"
 
 namespace octolod {
 namespace {
@@ -278,6 +279,7 @@ Result<std::vector<std::byte>> encode_gltf(std::span<const NodeMesh> meshes,
 // Streams straight into the file: peak memory is the model's buffer plus tinygltf's copy of it.
 Status write_gltf(const std::filesystem::path& path, std::span<const NodeMesh> meshes,
                   const GltfWriteOptions& options) {
+  OCTOLOD_RETURN_IF_ERROR(check_output_file(path, "the glTF"));
   std::filesystem::path tmp = path;
   tmp += ".tmp-" + std::to_string(::getpid());
   std::ofstream file(tmp, std::ios::binary | std::ios::trunc);

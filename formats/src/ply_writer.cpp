@@ -20,6 +20,7 @@
 #include <utility>
 #include <vector>
 
+#include "octolod/formats/output_file.h"
 #include "octolod/formats/unique_fd.h"
 #include "ply_header.h"
 
@@ -289,6 +290,7 @@ Result<std::unique_ptr<PlyWriter>> PlyWriter::create(const std::filesystem::path
   for (const std::string& comment : options.comments)
     if (comment.find_first_of("\r\n") != std::string::npos)
       return usage_error(path.string() + ": PLY comment contains a line break: " + comment);
+  OCTOLOD_RETURN_IF_ERROR(check_output_file(path, "the PLY"));
   Result<std::pair<std::string, UniqueFd>> temp = create_temporary(path);
   if (!temp.ok()) return temp.status();
   auto writer = std::make_unique<FileWriter>(path, temp->first, std::move(temp->second), options,
