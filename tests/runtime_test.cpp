@@ -11,6 +11,10 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
+#include <deque>
+#include <functional>
+#include <limits>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -18,7 +22,9 @@
 
 #include <nlohmann/json.hpp>
 
+#include "node_cache.h"
 #include "runtime_test_helpers.h"
+#include "tree_layout.h"
 
 namespace octolod::runtime {
 namespace {
@@ -236,6 +242,54 @@ TEST(Paging, ResidentBytesNeverExceedABudgetSmallerThanTheCut) {
   EXPECT_EQ(last.stats.fallbacks, 0u);
   EXPECT_EQ(last.stats.cache_misses, 0u);
   expect_covering_cut(fx.tree, last, camera);
+}
+
+// When no factor fits the cut (here the pinned root alone is over half the budget), the factor
+// stops at its cap instead of growing by 1.5^40 per frame to infinity, where it stayed for every
+// later view (and, in distance mode, the LOD index cast from log2(inf) was undefined).
+TEST(Paging, ACutThatNoCoarseningFitsKeepsTheFactorBounded) {
+  for (const SelectionMode mode : {SelectionMode::screen_space_error, SelectionMode::distance}) {
+    StreamingOptions options;
+    options.mode = mode;
+    options.distance_thresholds = {200.0, 100.0, 50.0};
+    options.max_resident_bytes = testing::decoded_bytes(SyntheticTree::kCoarseTriangles) * 3 / 2;
+    Fixture fx(3, options);
+    for (int i = 0; i < 20; ++i) {
+      const FrameResult& frame = fx.streaming->update(front(100.0f));
+      EXPECT_TRUE(std::isfinite(frame.stats.coarsening)) << i;
+      EXPECT_LE(frame.stats.coarsening, 1.2e7f) << i;
+      EXPECT_LE(frame.stats.resident_bytes + frame.stats.reserved_bytes, options.max_resident_bytes);
+      if (i > 2) {
+        EXPECT_EQ(draws_of(frame), (std::map<std::uint32_t, std::uint32_t>{{0, 1}})) << i;
+      }
+      fx.executor->run_pending();
+    }
+  }
+}
+
+// A load that cannot get its room reclaims nothing: the free entries it could have taken stay
+// as second chances. Before, it reclaimed every unprotected one and still failed.
+TEST(NodeCacheRoom, AFailedRequestReclaimsNothing) {
+  const SyntheticTree t = make_full_octree(2);
+  Result<TreeLayout> layout = build_tree_layout(t.manifest);
+  ASSERT_TRUE(layout.ok()) << layout.status().message();
+  const auto mesh = std::make_shared<const NodeMesh>(testing::strip_mesh(t.manifest.nodes[1].bounds, 16));
+  const std::uint64_t bytes = mesh_bytes(*mesh);
+  NodeCache cache(layout.value(), 3 * bytes);
+  const std::uint32_t old_slot = layout->nodes[1].lod_begin, recent[2] = {layout->nodes[2].lod_begin,
+                                                                          layout->nodes[3].lod_begin};
+  cache.request(old_slot);
+  ASSERT_TRUE(cache.install(old_slot, mesh, 1));
+  for (const std::uint32_t slot : recent) {
+    cache.request(slot);
+    ASSERT_TRUE(cache.install(slot, mesh, 5));
+  }
+  EXPECT_FALSE(cache.make_room(2 * bytes, 3));  // only the frame-1 entry may go: not enough
+  EXPECT_TRUE(cache.resident(old_slot));
+  EXPECT_EQ(cache.resident_bytes(), 3 * bytes);
+  EXPECT_TRUE(cache.make_room(bytes, 3));
+  EXPECT_FALSE(cache.resident(old_slot));
+  for (const std::uint32_t slot : recent) EXPECT_TRUE(cache.resident(slot));
 }
 
 TEST(Paging, RelaxedTargetReturnsToTheConfiguredOneWhenTheViewAllows) {
@@ -531,6 +585,95 @@ TEST(Paging, ThreadPoolLoadsConvergeToTheReferenceCut) {
   testing::reference_cut(tree.manifest, camera, 2.0, 0, expected);
   EXPECT_EQ(draws_of(*frame), expected);
   expect_covering_cut(tree, *frame, camera);
+}
+
+// A camera with a NaN (lookAt with eye == target makes the view NaN), or without a field of view
+// or a viewport, is skipped: the previous frame's draws, no loads, and the next good camera
+// selects as if it had not come.
+TEST(Selection, AnUnusableCameraChangesNothing) {
+  Fixture fx(3);
+  const Camera good = front(100.0f);
+  const std::map<std::uint32_t, std::uint32_t> settled = draws_of(fx.settle_at(good));
+  const std::uint64_t reads = fx.tree.source->total_reads();
+  Camera nan_eye = good;
+  nan_eye.position.x = std::numeric_limits<float>::quiet_NaN();
+  Camera no_fov = good;
+  no_fov.fovy_radians = 0.0f;
+  Camera no_viewport = good;
+  no_viewport.viewport_height_px = 0.0f;
+  const Camera same_point = look(kCenter, kCenter);
+  for (const Camera& bad : {nan_eye, no_fov, no_viewport, same_point}) {
+    EXPECT_FALSE(is_usable(bad));
+    const FrameResult& frame = fx.streaming->update(bad);
+    EXPECT_TRUE(frame.stats.camera_rejected);
+    EXPECT_EQ(draws_of(frame), settled);
+    EXPECT_EQ(frame.stats.drawn_nodes, settled.size());
+    EXPECT_EQ(frame.stats.loads_issued, 0u);
+    EXPECT_EQ(fx.executor->pending(), 0u);
+  }
+  const FrameResult& again = fx.streaming->update(good);
+  EXPECT_FALSE(again.stats.camera_rejected);
+  EXPECT_EQ(again.stats.coarsening, 1.0f);
+  EXPECT_EQ(draws_of(again), settled);
+  EXPECT_EQ(fx.tree.source->total_reads(), reads);
+}
+
+// Runs posted tasks one at a time, in order, when the test says.
+class StepExecutor final : public Executor {
+ public:
+  void post(std::function<void()> task) override { tasks_.push_back(std::move(task)); }
+  bool run_one() {
+    if (tasks_.empty()) return false;
+    std::function<void()> task = std::move(tasks_.front());
+    tasks_.pop_front();
+    task();
+    return true;
+  }
+
+ private:
+  std::deque<std::function<void()>> tasks_;
+};
+
+// Reads through another source, calling `on_read` first (from the loader task).
+class HookedSource final : public NodeSource {
+ public:
+  HookedSource(std::shared_ptr<const NodeSource> inner, std::function<void()> on_read)
+      : inner_(std::move(inner)), on_read_(std::move(on_read)) {}
+  Result<std::vector<std::byte>> read(std::string_view file) const override {
+    on_read_();
+    return inner_->read(file);
+  }
+
+ private:
+  std::shared_ptr<const NodeSource> inner_;
+  std::function<void()> on_read_;
+};
+
+// Two trees on one executor take turns: a loader task loads one request, so tree A, whose
+// render thread keeps queueing loads while A's loads run, cannot hold the executor's thread.
+// Before, A's first task looped while A had requests, and B's root waited for A's whole cut.
+TEST(Paging, TreesSharingAnExecutorTakeTurns) {
+  SyntheticTree a = make_full_octree(3), b = make_full_octree(2);
+  auto executor = std::make_shared<StepExecutor>();
+  StreamingOptions options;
+  options.max_loads_in_flight = 4;
+  options.prefetch = false;
+  std::unique_ptr<StreamingTree> tree_a;
+  std::uint64_t a_loads = 0;
+  auto source_a = std::make_shared<HookedSource>(a.source, [&] {
+    ++a_loads;
+    tree_a->update(front(100.0f));  // A's next frame, while its load runs
+  });
+  auto opened_a = StreamingTree::open(a.manifest, source_a, executor, options);
+  auto opened_b = StreamingTree::open(b.manifest, b.source, executor, options);
+  ASSERT_TRUE(opened_a.ok() && opened_b.ok());
+  tree_a = std::move(opened_a).value();
+  tree_a->update(front(100.0f));
+  opened_b.value()->update(front(100.0f));
+  while (b.source->total_reads() == 0 && a_loads < 100 && executor->run_one()) {
+  }
+  EXPECT_EQ(b.source->total_reads(), 1u);
+  EXPECT_LE(a_loads, options.max_loads_in_flight);
 }
 
 TEST(Paging, TreeCanBeDestroyedWithLoadsStillPosted) {

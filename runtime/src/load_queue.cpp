@@ -2,6 +2,7 @@
 #include "load_queue.h"
 
 #include <algorithm>
+#include <exception>
 #include <utility>
 
 namespace octolod::runtime {
@@ -32,8 +33,11 @@ void LoadQueue::take_completed(std::vector<LoadCompletion>& out) {
 
 std::uint32_t LoadQueue::claim_tasks(std::uint32_t max_tasks) {
   std::lock_guard lock(mutex_);
-  const auto wanted = std::min<std::uint32_t>(max_tasks, static_cast<std::uint32_t>(pending_.size()));
-  const std::uint32_t more = wanted > tasks_ ? wanted - tasks_ : 0;
+  // a task loads one request: one waiting task per pending request, at most max_tasks in all
+  const std::uint32_t waiting = tasks_ - running_;
+  const auto pending = static_cast<std::uint32_t>(pending_.size());
+  const std::uint32_t room = max_tasks > tasks_ ? max_tasks - tasks_ : 0;
+  const std::uint32_t more = pending > waiting ? std::min(room, pending - waiting) : 0;
   tasks_ += more;
   return more;
 }
@@ -45,21 +49,22 @@ void LoadQueue::shutdown() {
 }
 
 void LoadQueue::run_task() {
-  for (;;) {
-    std::uint32_t slot = 0;
-    {
-      std::lock_guard lock(mutex_);
-      if (shutdown_ || pending_.empty()) {
-        --tasks_;
-        return;
-      }
-      slot = pending_.back();
-      pending_.pop_back();
-    }
-    LoadCompletion done = load(slot);
+  std::uint32_t slot = 0;
+  {
     std::lock_guard lock(mutex_);
-    if (!shutdown_) completed_.push_back(std::move(done));
+    if (shutdown_ || pending_.empty()) {
+      --tasks_;
+      return;
+    }
+    slot = pending_.back();
+    pending_.pop_back();
+    ++running_;
   }
+  LoadCompletion done = load(slot);
+  std::lock_guard lock(mutex_);
+  --running_;
+  --tasks_;
+  if (!shutdown_) completed_.push_back(std::move(done));
 }
 
 LoadCompletion LoadQueue::load(std::uint32_t slot) const {
@@ -67,22 +72,34 @@ LoadCompletion LoadQueue::load(std::uint32_t slot) const {
   done.slot = slot;
   const LodInfo& lod = *lods_[slot];
   const std::string& file = lod.file;
+  // a NodeSource that throws, or memory running out, fails this load instead of the loader
+  // thread (ThreadPoolExecutor would terminate) or the render thread (SynchronousExecutor)
+  try {
+    read_and_decode(lod, done);
+  } catch (const std::exception& e) {
+    done.mesh.reset();
+    done.status = io_error(file + ": load failed: " + e.what());
+  }
+  return done;
+}
+
+void LoadQueue::read_and_decode(const LodInfo& lod, LoadCompletion& done) const {
+  const std::string& file = lod.file;
   Result<std::vector<std::byte>> bytes = source_->read(file);
   if (!bytes.ok()) {
     done.status = bytes.status();
-    return done;
+    return;
   }
   Result<NodeMesh> mesh = decode_node_file(bytes.value(), file);
   if (!mesh.ok()) {
     done.status = mesh.status();
-    return done;
+    return;
   }
   if (const Status checked = check_node_lod(mesh.value(), lod, layout_, file); !checked.ok()) {
     done.status = checked;
-    return done;
+    return;
   }
   done.mesh = std::make_shared<const NodeMesh>(std::move(mesh).value());
-  return done;
 }
 
 }  // namespace octolod::runtime

@@ -41,17 +41,21 @@ class LoadQueue {
   void set_pending(std::vector<std::uint32_t>& in);
   // Moves every completed load into `out` (replacing its content).
   void take_completed(std::vector<LoadCompletion>& out);
-  // How many more loader tasks to post so that min(pending, max_tasks) are running or queued;
-  // counts them as posted.
+  // How many more loader tasks to post so that every pending request has a task waiting for it,
+  // with at most max_tasks posted and unfinished; counts them as posted.
   std::uint32_t claim_tasks(std::uint32_t max_tasks);
   // Drops pending requests; running tasks finish their current load and stop.
   void shutdown();
 
-  // Loader task body: loads pending requests, most important first, until none is left.
+  // Loader task body: loads the most important pending request, if any. One request per task,
+  // so that the tasks of several trees sharing an executor interleave in its queue (a task that
+  // looped while its tree kept requesting held a pool thread for as long).
   void run_task();
 
  private:
+  // A failed load (an exception included) is a completion with an error status.
   LoadCompletion load(std::uint32_t slot) const;
+  void read_and_decode(const LodInfo& lod, LoadCompletion& done) const;
 
   const std::shared_ptr<const NodeSource> source_;
   const std::shared_ptr<const Manifest> manifest_;
@@ -61,7 +65,8 @@ class LoadQueue {
   std::mutex mutex_;
   std::vector<std::uint32_t> pending_;
   std::vector<LoadCompletion> completed_;
-  std::uint32_t tasks_ = 0;
+  std::uint32_t tasks_ = 0;    // posted and not finished
+  std::uint32_t running_ = 0;  // of those, loading
   bool shutdown_ = false;
 };
 

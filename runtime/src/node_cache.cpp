@@ -46,7 +46,7 @@ bool NodeCache::install(std::uint32_t slot, std::shared_ptr<const NodeMesh> mesh
   s.released = false;
   s.last_used = frame;
   free_bytes_ += bytes;
-  all_protected_from_ = kNoSlot;
+  short_from_ = kNoSlot;
   link_tail(slot);
   count_resident(slot, +1);
   return true;
@@ -68,7 +68,7 @@ void NodeCache::release(std::uint32_t slot) {
   if (!s.in_use || s.pinned) return;
   s.in_use = false;
   s.released = true;
-  all_protected_from_ = kNoSlot;
+  short_from_ = kNoSlot;
   in_use_bytes_ -= s.bytes;
   free_bytes_ += s.bytes;
   link_tail(slot);
@@ -89,22 +89,31 @@ void NodeCache::pin(std::uint32_t slot) {
 }
 
 bool NodeCache::make_room(std::uint64_t bytes, std::uint32_t protect_from_frame) {
-  auto fits = [&] { return in_use_bytes_ + free_bytes_ + reserved_bytes_ + bytes <= budget_; };
-  if (fits()) return true;
+  const std::uint64_t held = in_use_bytes_ + free_bytes_ + reserved_bytes_;
+  if (held + bytes <= budget_) return true;
   // Even reclaiming every free entry would not do: keep them all.
   if (in_use_bytes_ + reserved_bytes_ + bytes > budget_) return false;
-  // A walk already found every free entry protected at this level: do not walk again.
-  if (all_protected_from_ != kNoSlot && protect_from_frame <= all_protected_from_) return false;
-  // Protected entries sit mostly near the tail (touched ones move there), so this walk rarely
-  // skips many before it has made room.
-  for (std::uint32_t s = head_; s != kNoSlot && !fits();) {
-    const std::uint32_t next = slots_[s].next;
-    if (slots_[s].last_used < protect_from_frame) reclaim(s);
-    s = next;
+  const std::uint64_t needed = held + bytes - budget_;
+  // An earlier walk found fewer unprotected bytes at this level or a lower one (fewer free
+  // entries below it): do not walk again.
+  if (short_from_ != kNoSlot && protect_from_frame <= short_from_ && needed > short_bytes_) return false;
+  // Entries are reclaimed only once enough are found: reclaiming them for a request that then
+  // fails would empty the second-chance list for nothing. Protected entries sit mostly near the
+  // tail (touched ones move there), so the walk rarely passes many before it has found room.
+  victims_.clear();
+  std::uint64_t found = 0;
+  for (std::uint32_t s = head_; s != kNoSlot && found < needed; s = slots_[s].next)
+    if (slots_[s].last_used < protect_from_frame) {
+      victims_.push_back(s);
+      found += slots_[s].bytes;
+    }
+  if (found < needed) {
+    short_from_ = protect_from_frame;
+    short_bytes_ = found;
+    return false;
   }
-  if (fits()) return true;
-  all_protected_from_ = protect_from_frame;
-  return false;
+  for (const std::uint32_t s : victims_) reclaim(s);
+  return true;
 }
 
 void NodeCache::reclaim(std::uint32_t slot) {

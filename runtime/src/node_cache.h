@@ -64,8 +64,7 @@ class NodeCache {
 
   // Reclaims free entries, least recently used first, until `bytes` more fit in the budget next
   // to everything resident and reserved. Entries used or touched at or after `protect_from_frame`
-  // are kept. False when it cannot make room; then nothing is reclaimed unless only protected
-  // entries stood in the way.
+  // are kept. False when it cannot make room; then nothing is reclaimed.
   bool make_room(std::uint64_t bytes, std::uint32_t protect_from_frame);
 
   std::uint64_t resident_bytes() const { return in_use_bytes_ + free_bytes_; }
@@ -95,9 +94,11 @@ class NodeCache {
   std::vector<Slot> slots_;
   std::vector<std::uint32_t> subtree_resident_;
   std::uint32_t head_ = kNoSlot, tail_ = kNoSlot;
-  // When not kNoSlot: every free entry was used at or after this frame (a make_room walk found
-  // nothing to reclaim below it). Cleared when an entry joins the free list.
-  std::uint32_t all_protected_from_ = kNoSlot;
+  // When not kNoSlot: a make_room walk found only short_bytes_ in free entries used before this
+  // frame. Cleared when an entry joins the free list (leaving it only lowers what a walk finds).
+  std::uint32_t short_from_ = kNoSlot;
+  std::uint64_t short_bytes_ = 0;
+  std::vector<std::uint32_t> victims_;  // make_room's scratch: the entries it will reclaim
   std::uint64_t in_use_bytes_ = 0, free_bytes_ = 0, reserved_bytes_ = 0;
 };
 

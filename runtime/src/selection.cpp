@@ -49,8 +49,10 @@ std::uint32_t choose_lod(const TreeLayout& tree, const LayoutNode& n, float true
   const double refine_below = thresholds[std::min<std::size_t>(n.depth, thresholds.size() - 1)];
   if (distance < refine_below && n.child_count > 0) return kRefine;
   if (distance < 2.0 * refine_below) return n.lod_begin;
-  const auto coarser = static_cast<std::uint32_t>(std::floor(std::log2(distance / refine_below)));
-  return n.lod_begin + std::min(coarser, n.lod_count - 1);
+  // compared before the cast: a distance scaled past float's range makes the log infinite
+  const double coarser = std::floor(std::log2(distance / refine_below));
+  if (!(coarser < static_cast<double>(n.lod_count - 1))) return n.lod_begin + n.lod_count - 1;
+  return n.lod_begin + static_cast<std::uint32_t>(coarser);
 }
 
 }  // namespace

@@ -155,8 +155,19 @@ struct StreamingTree::Impl {
 const FrameResult& StreamingTree::Impl::update(const Camera& camera) {
   const auto start = std::chrono::steady_clock::now();
   const double start_cpu_ms = thread_cpu_ms();
-  ++frame;
   FrameStats& stats = result.stats;
+  if (!is_usable(camera)) {  // the last frame's draws again, and nothing planned from this view
+    stats = FrameStats{};
+    stats.camera_rejected = true;
+    stats.coarsening = coarsening;
+    stats.drawn_nodes = static_cast<std::uint32_t>(result.draws.size());
+    for (const std::uint32_t slot : result_slots) stats.drawn_triangles += cache.triangles(slot);
+    stats.resident_bytes = cache.resident_bytes();
+    stats.reserved_bytes = cache.reserved_bytes();
+    stats.loads_in_flight = requested;
+    return result;
+  }
+  ++frame;
   stats = FrameStats{};
 
   install_completions(stats);
@@ -217,18 +228,21 @@ void StreamingTree::Impl::hand_out_draws(FrameStats& stats) {
 // Selects the cut at the target, relaxed by a factor when it would not fit max_cut_fraction of
 // the budget. Starts one step finer than the last frame's factor, so a steady view costs one or
 // two selections and the factor returns to 1 when the view allows.
+// The factor never passes kMaxCoarsening, so a view that no factor fits (the pinned root alone
+// over the limit, a tree without coarse LODs) costs two selections per frame, and the factor
+// comes back down in as many frames as it took to climb once the view allows.
 SelectionCounters StreamingTree::Impl::select_within_budget(SelectionView& view) {
   constexpr float kStep = 1.5f;
-  constexpr int kMaxSteps = 40;  // 1.5^40: beyond any tree's error range
+  constexpr float kMaxCoarsening = 1.1e7f;  // about 1.5^40: beyond any tree's error range
   const auto limit = static_cast<std::uint64_t>(options.max_cut_fraction *
                                                 static_cast<double>(options.max_resident_bytes));
-  view.coarsening = std::max(1.0f, coarsening / kStep);
+  view.coarsening = std::clamp(coarsening / kStep, 1.0f, kMaxCoarsening);
   SelectionCounters counters;
-  for (int step = 0;; ++step) {
+  for (;;) {
     counters = {};
     select_cut(tree, view, stack, cut, counters);
-    if (step == kMaxSteps || cut_bytes() <= limit) break;
-    view.coarsening *= kStep;
+    if (view.coarsening >= kMaxCoarsening || cut_bytes() <= limit) break;
+    view.coarsening = std::min(view.coarsening * kStep, kMaxCoarsening);
   }
   coarsening = view.coarsening;
   return counters;
@@ -391,7 +405,7 @@ void StreamingTree::Impl::update_in_use() {
 // Prefetch (El-Sana & Chiang 2000; docs/design.md): the LOD one step finer and one step coarser
 // than wanted ones (the next LOD of the node, else its children's coarsest / its parent's
 // finest), and the cut seen from where the camera will be if it keeps its velocity. Both are
-// planned a bounded piece per frame (StreamingOptions::prefetch_cut_entries_per_frame,
+// planned a bounded piece per frame (StreamingOptions::prefetch_checks_per_frame,
 // prediction_visits_per_frame): a whole second selection every frame would cost as much as the
 // frame's own.
 void StreamingTree::Impl::collect_prefetch(const SelectionView& view, const Camera& camera) {

@@ -17,6 +17,11 @@ struct Camera {
   float fovy_radians = 1.0f;           // vertical field of view of `projection`
 };
 
+// Whether update() can select for `camera`: every number finite, 0 < fovy_radians < pi and a
+// positive viewport height. A NaN eye (lookAt with eye == target gives a NaN view) would refine
+// every node to its leaves and cull nothing.
+bool is_usable(const Camera& camera);
+
 // A symmetric perspective camera at `eye` looking at `target` (model space), with near/far
 // clip distances in model units and aspect = width / height.
 Camera make_perspective_camera(glm::vec3 eye, glm::vec3 target, glm::vec3 up, float fovy_radians,

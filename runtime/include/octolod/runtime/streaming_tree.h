@@ -14,7 +14,12 @@
 //   if (!tree.ok()) { /* tree.status().message() */ }
 //   every frame:
 //     const FrameResult& frame = tree.value()->update(camera);   // never blocks on I/O
-//     for (const DrawItem& d : frame.draws) draw(*d.mesh);       // upload / cache by d.mesh.get()
+//     for (const DrawItem& d : frame.draws) draw(*d.mesh);
+//   A GPU copy keyed by d.mesh.get() must hold d.mesh while it lives (samples/engine_example):
+//   once nothing holds a mesh its address can come back with another node's mesh. Held meshes
+//   are memory outside max_resident_bytes, so drop them with their uploads. The game owns the
+//   Executor: destroying the last owner of a ThreadPoolExecutor joins its threads, which waits
+//   out the reads they are in.
 //
 // Coordinates: cameras and the drawn meshes are in the tree's frame, model units relative to
 // manifest().origin (zeros unless the bake recentred double input positions); a game places the
@@ -133,6 +138,9 @@ struct FrameStats {
   float coarsening = 1.0f;
   std::uint32_t holes = 0;  // wanted regions with nothing resident to draw: only before the
                             // root's coarsest LOD has arrived, or when it failed to load
+  // The camera was not usable (is_usable, camera.h): update() changed nothing, the draws are
+  // the previous frame's (none before the first), and only the byte and in-flight counts are set.
+  bool camera_rejected = false;
   // update() never blocks on a load, so this is always 0; a frame with cache_misses > 0 drew
   // fallbacks instead of waiting.
   std::uint32_t waiting_on_io = 0;
@@ -171,6 +179,7 @@ class StreamingTree {
 
   // Selects and pages for one frame. Never waits on I/O. The returned reference stays valid until
   // the next update() or the tree's destruction; copy the DrawItems (or their meshes) to keep them.
+  // A camera that is not is_usable() is skipped (FrameStats::camera_rejected).
   const FrameResult& update(const Camera& camera);
 
   const Manifest& manifest() const;
