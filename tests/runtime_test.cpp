@@ -15,6 +15,7 @@
 #include <deque>
 #include <functional>
 #include <limits>
+#include <stdexcept>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -648,6 +649,37 @@ class HookedSource final : public NodeSource {
   std::shared_ptr<const NodeSource> inner_;
   std::function<void()> on_read_;
 };
+
+// A NodeSource that throws (or memory running out) fails that load like a missing file: logged,
+// marked bad, an ancestor drawn; the loader's accounting stays right, so the rest still loads.
+TEST(Paging, ALoadThatThrowsFailsLikeAMissingFile) {
+  SyntheticTree t = make_full_octree(2);
+  const std::string broken = t.manifest.nodes[1].lods[0].file;
+  struct Throwing final : NodeSource {
+    std::shared_ptr<const NodeSource> inner;
+    std::string broken;
+    Result<std::vector<std::byte>> read(std::string_view file) const override {
+      if (file == broken) throw std::runtime_error("simulated failure");
+      return inner->read(file);
+    }
+  };
+  auto throwing = std::make_shared<Throwing>();
+  throwing->inner = t.source;
+  throwing->broken = broken;
+  auto executor = std::make_shared<SynchronousExecutor>();
+  std::vector<std::string> log;
+  StreamingOptions options;
+  options.log = [&](std::string_view message) { log.emplace_back(message); };
+  auto opened = StreamingTree::open(t.manifest, throwing, executor, options);
+  ASSERT_TRUE(opened.ok());
+  const FrameResult& frame = settle(*opened.value(), *executor, front(50.0f));
+  EXPECT_TRUE(opened.value()->is_bad(1, 0));
+  ASSERT_EQ(log.size(), 1u);
+  EXPECT_NE(log[0].find(broken + ": load failed: simulated failure"), std::string::npos) << log[0];
+  EXPECT_EQ(frame.stats.loads_in_flight, 0u);
+  EXPECT_EQ(frame.stats.holes, 0u);
+  EXPECT_GT(frame.stats.drawn_nodes, 1u);
+}
 
 // Two trees on one executor take turns: a loader task loads one request, so tree A, whose
 // render thread keeps queueing loads while A's loads run, cannot hold the executor's thread.
