@@ -423,18 +423,28 @@ TEST(Paging, NeededLoadsComeBeforePrefetchesAndHigherPriorityFirst) {
   Fixture fx(3, options);
   fx.streaming->update(front(100.0f));
   fx.executor->run_pending();  // root
+  // The root stands in for the 64 wanted leaves: first the coarsest LOD of every leaf's parent
+  // (so that a fallback there covers one octant), then the leaves, nearest first (z high);
+  // prefetches never outrank needed loads.
+  auto resident_lods = [&](std::uint32_t depth, std::uint32_t lod) {
+    std::vector<std::uint32_t> found;
+    for (std::uint32_t n = 0; n < fx.tree.manifest.nodes.size(); ++n)
+      if (fx.tree.manifest.nodes[n].depth == depth && fx.streaming->is_resident(n, lod)) found.push_back(n);
+    return found;
+  };
+  for (int i = 0; i < 8; ++i) {
+    fx.streaming->update(front(100.0f));
+    fx.executor->run_pending();
+  }
   fx.streaming->update(front(100.0f));
+  EXPECT_EQ(resident_lods(1, 1).size(), 8u);
+  EXPECT_TRUE(resident_lods(1, 0).empty());
+  EXPECT_TRUE(resident_lods(2, 0).empty());
   fx.executor->run_pending();
   fx.streaming->update(front(100.0f));
-  // One leaf loaded: a wanted one (prefetches never outrank needed loads), nearest first (z high).
-  std::uint32_t loaded = 0;
-  for (std::uint32_t n = 0; n < fx.tree.manifest.nodes.size(); ++n) {
-    if (!fx.streaming->is_resident(n, 0)) continue;
-    ++loaded;
-    EXPECT_TRUE(fx.tree.manifest.nodes[n].is_leaf());
-    EXPECT_EQ(fx.tree.manifest.nodes[n].cell.max[2], 64.0f) << fx.tree.manifest.nodes[n].path;
-  }
-  EXPECT_EQ(loaded, 1u);
+  const std::vector<std::uint32_t> leaves = resident_lods(2, 0);
+  ASSERT_EQ(leaves.size(), 1u);
+  EXPECT_EQ(fx.tree.manifest.nodes[leaves[0]].cell.max[2], 64.0f) << fx.tree.manifest.nodes[leaves[0]].path;
 }
 
 // A valid node file that is not the one the manifest describes (LOD 1's bytes under LOD 0's
@@ -649,6 +659,28 @@ class HookedSource final : public NodeSource {
   std::shared_ptr<const NodeSource> inner_;
   std::function<void()> on_read_;
 };
+
+// A node whose wanted LOD and descendants are missing falls back to its nearest resident
+// ancestor, which replaces everything under it. Without prefetches only the root and the wanted
+// leaves were ever requested, so the root stood in for all 64 leaves until the last arrived; now
+// the parents' coarsest LODs come with the first leaves and each octant shows as it completes.
+TEST(Paging, AFallbackAsksForTheParentSoTheRootDoesNotStandInForLong) {
+  StreamingOptions options;
+  options.prefetch = false;
+  options.max_loads_in_flight = 8;
+  Fixture fx(3, options);
+  const Camera camera = front(20.0f);
+  int root_only_frames = 0, frames = 0;
+  for (; frames < 40; ++frames) {
+    const FrameResult& frame = fx.streaming->update(camera);
+    if (frame.draws.size() == 1 && frame.draws[0].node == 0) ++root_only_frames;
+    if (frame.stats.fallbacks == 0 && !frame.draws.empty()) break;
+    fx.executor->run_pending();
+  }
+  EXPECT_LT(frames, 40);
+  EXPECT_EQ(root_only_frames, 1) << frames << " frames";  // before: 5 of 9
+  EXPECT_TRUE(fx.streaming->is_resident(fx.tree.node_at("0"), 1));
+}
 
 // A NodeSource that throws (or memory running out) fails that load like a missing file: logged,
 // marked bad, an ancestor drawn; the loader's accounting stays right, so the rest still loads.

@@ -30,6 +30,9 @@ double thread_cpu_ms() {
 
 // Added to the priority of a load whose region has nothing resident to draw at all.
 constexpr float kHolePriority = 1e30f;
+// Added to the priority of a parent whose absence made an ancestor above it replace a whole
+// subtree (request_parent_fallback): after holes, before any LOD that only adds detail.
+constexpr float kFallbackPriority = 1e20f;
 
 Status validate(const StreamingOptions& o) {
   if (o.max_resident_bytes == 0) return usage_error("max_resident_bytes must be positive");
@@ -92,6 +95,7 @@ struct StreamingTree::Impl {
   bool cover_with_descendants(std::uint32_t node, const Frustum& frustum);
   bool substitute_ancestor(std::uint32_t node, std::uint32_t& covered_end);
   void request_nearest_ancestor(const WantedLod& wanted);
+  void request_parent_fallback(const WantedLod& wanted, const SelectionView& view);
   void update_in_use();
   void hand_out_draws(FrameStats& stats);
   void collect_prefetch(const SelectionView& view, const Camera& camera);
@@ -299,7 +303,10 @@ void StreamingTree::Impl::resolve(const SelectionView& view, FrameStats& stats) 
         needed.push_back({w.priority, w.slot});
       }
     }
-    if (w.node < covered_end) continue;
+    if (w.node < covered_end) {  // an ancestor draws it
+      if (!resident) request_parent_fallback(w, view);
+      continue;
+    }
     if (resident) {
       draws.push_back({w.node, w.slot, false});
       continue;
@@ -307,7 +314,10 @@ void StreamingTree::Impl::resolve(const SelectionView& view, FrameStats& stats) 
     if (substitute_same_node(w)) continue;
     if (cache.state(w.slot) == SlotState::bad) request_nearest_ancestor(w);
     if (cover_with_descendants(w.node, view.frustum)) continue;
-    if (substitute_ancestor(w.node, covered_end)) continue;
+    if (substitute_ancestor(w.node, covered_end)) {
+      request_parent_fallback(w, view);
+      continue;
+    }
     ++stats.holes;
     if (candidate < needed.size()) needed[candidate].priority += kHolePriority;
   }
@@ -385,6 +395,25 @@ void StreamingTree::Impl::request_nearest_ancestor(const WantedLod& wanted) {
       }
       return;
     }
+  }
+}
+
+// An ancestor above the parent replaced the node's whole subtree, resident siblings and all:
+// the parent's coarsest LOD (a few hundred triangles) is asked for before any detail (nearest
+// first among such parents), and the next fallback there covers the parent's children only.
+// Without it a camera turning to a region whose middle levels were reclaimed drew the root alone
+// until every wanted LOD below it had arrived.
+void StreamingTree::Impl::request_parent_fallback(const WantedLod& wanted, const SelectionView& view) {
+  const std::int32_t p = tree.nodes[wanted.node].parent;
+  if (p < 0) return;
+  const auto parent = static_cast<std::uint32_t>(p);
+  const LayoutNode& n = tree.nodes[parent];
+  if (n.lod_count == 0 || finest_resident(parent) != kNoSlot) return;
+  const std::uint32_t slot = tree.slot_end(parent) - 1;
+  if (cache.state(slot) == SlotState::absent && candidate_mark[slot] != frame) {
+    candidate_mark[slot] = frame;
+    const float size = 2.0f * glm::length(n.half) * view.pixels_per_unit / distance_to_node(tree, parent, view.eye);
+    needed.push_back({kFallbackPriority + size, slot});
   }
 }
 
