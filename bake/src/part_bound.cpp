@@ -18,12 +18,23 @@ constexpr double kCloseEnough2 = 1.05 * 1.05;
 constexpr double kCoverTolerance = 1e-9;
 
 // |x - corner| bounds dist(x, T) from above: a corner of T within sqrt(limit2) of x settles x.
+// All three are measured: which one settles x is a coin toss, and a test of each in turn was a
+// mispredicted branch.
 bool near_corner(const Vec3d& x, const Triangle3d& tri, double limit2) {
+  bool near = false;
   for (const Vec3d& corner : tri) {
     const Vec3d d = sub(x, corner);
-    if (dot(d, d) <= limit2) return true;
+    near |= dot(d, d) <= limit2;
   }
-  return false;
+  return near;
+}
+
+// Whether list[0, count) holds `value`, every entry compared: the lists are a prism's few pieces,
+// and a search that stopped at the match mispredicted where it stopped.
+bool holds(const std::uint32_t* list, std::size_t count, std::uint32_t value) {
+  bool found = false;
+  for (std::size_t i = 0; i < count; ++i) found |= list[i] == value;
+  return found;
 }
 
 // Points and convex polygons in a plane's coordinates (a part clipped by a prism's sides). Each
@@ -78,7 +89,7 @@ void clip(const Polygon& polygon, const std::array<double, 9>& h, std::size_t li
       kept.on[size] = static_cast<std::uint8_t>(polygon.on[k] | (h0 == 0.0 ? bit : 0u));
       kept.corner[size++] = p0;
     }
-    if ((h0 > 0.0 && h1 < 0.0) || (h0 < 0.0 && h1 > 0.0)) {
+    if (((h0 > 0.0) & (h1 < 0.0)) | ((h0 < 0.0) & (h1 > 0.0))) {  // one branch, not four
       const double t = h0 / (h0 - h1);
       kept.on[size] = static_cast<std::uint8_t>((polygon.on[k] & polygon.on[next]) | bit);
       kept.corner[size++] = {p0[0] + t * (p1[0] - p0[0]), p0[1] + t * (p1[1] - p0[1])};
@@ -309,9 +320,7 @@ bool PartBounder::Prism::offer(std::uint32_t candidate) {
   if (settled_) return true;
   // offered before: only a piece or a candidate facing away is remembered (the others are
   // passed over again as they were)
-  const std::span<const std::uint32_t> pieces(piece_triangle_, piece_count_), away(facing_away_, facing_away_count_);
-  if (std::find(pieces.begin(), pieces.end(), candidate) != pieces.end() ||
-      std::find(away.begin(), away.end(), candidate) != away.end())
+  if (holds(piece_triangle_, piece_count_, candidate) | holds(facing_away_, facing_away_count_, candidate))
     return false;
   const Sphere& sphere = bounder_.sphere_[candidate];
   const Vec3d apart = sub(sphere.center, middle_);
@@ -333,13 +342,17 @@ bool PartBounder::Prism::offer(std::uint32_t candidate) {
   // the part against the prism's sides (the projected triangle winds counter-clockwise);
   // left_of values this small are rounding: a millionth of a millionth of their scale
   const double on_line = 1e-12 * reach * reach;
+  // (the sides' signs combined with & and |, not && and ||: each is a coin toss per candidate,
+  // and a branch per comparison mispredicted more than the comparisons cost)
   std::array<std::array<double, 9>, 3> side;  // of the part's corners: the first clip's sides
+  std::array<bool, 3> cuts{};  // per prism side: its line cuts into the part
   bool empty = false, inside = true;
   for (std::size_t e = 0; e < 3 && !empty; ++e) {
     const Point2 &from = corner[e], &to = corner[e + 1 == 3 ? 0 : e + 1];
     for (std::size_t k = 0; k < 3; ++k) side[e][k] = side_of(from, to, part2d_[k], on_line);
-    empty = side[e][0] < 0.0 && side[e][1] < 0.0 && side[e][2] < 0.0;
-    inside = inside && side[e][0] >= 0.0 && side[e][1] >= 0.0 && side[e][2] >= 0.0;
+    empty = (side[e][0] < 0.0) & (side[e][1] < 0.0) & (side[e][2] < 0.0);
+    cuts[e] = (side[e][0] < 0.0) | (side[e][1] < 0.0) | (side[e][2] < 0.0);
+    inside = inside & (side[e][0] >= 0.0) & (side[e][1] >= 0.0) & (side[e][2] >= 0.0);
   }
   if (empty) return false;
   // clipped by the sides whose lines cut into the part (the others keep all of it, and a piece
@@ -352,7 +365,7 @@ bool PartBounder::Prism::offer(std::uint32_t candidate) {
   piece->size = 3;
   bool clipped = false;
   for (std::size_t e = 0; e < 3 && !inside && piece->size > 0; ++e) {
-    if (!(side[e][0] < 0.0 || side[e][1] < 0.0 || side[e][2] < 0.0)) continue;
+    if (!cuts[e]) continue;
     if (clipped) {
       const Point2 &from = corner[e], &to = corner[e + 1 == 3 ? 0 : e + 1];
       for (std::size_t k = 0; k < piece->size; ++k) side[e][k] = side_of(from, to, piece->corner[k], on_line);
@@ -401,11 +414,10 @@ bool PartBounder::Prism::offer(std::uint32_t candidate) {
 bool PartBounder::Prism::offer_neighbours() {
   // piece_count_ grows as the pieces are offered: their own open sides are walked in turn
   for (std::size_t i = 0; i < piece_count_ && !settled_; ++i)
-    for (std::size_t e = 0; e < 3; ++e)
-      if ((piece_open_[i] & (1u << e)) != 0) {
-        const std::uint32_t across = bounder_.across_[piece_triangle_[i]][e];
-        if (across != kNoTriangle && offer(across)) return true;
-      }
+    for (unsigned open = piece_open_[i]; open != 0; open &= open - 1) {
+      const std::uint32_t across = bounder_.across_[piece_triangle_[i]][std::countr_zero(open)];
+      if (across != kNoTriangle && offer(across)) return true;
+    }
   return settled_;
 }
 
@@ -417,15 +429,13 @@ bool PartBounder::Prism::offer_neighbours() {
 // two-sided sheets do not hide it.)
 bool PartBounder::Prism::closed() const {
   const auto& output = bounder_.output_;
-  const std::uint32_t* const pieces_end = piece_triangle_ + piece_count_;
   for (std::size_t i = 0; i < piece_count_; ++i)
-    for (std::size_t e = 0; e < 3; ++e) {
-      if ((piece_open_[i] & (1u << e)) == 0) continue;
+    for (unsigned open = piece_open_[i]; open != 0; open &= open - 1) {
+      const auto e = static_cast<std::size_t>(std::countr_zero(open));
       const std::uint32_t of = piece_triangle_[i];
       // the first triangle across is a piece at all but 1 in 8,000 open sides (200K rock); else
-      // any other piece that runs the edge backwards
-      const std::uint32_t first = bounder_.across_[of][e];
-      if (first != kNoTriangle && std::find(piece_triangle_, pieces_end, first) != pieces_end) continue;
+      // any other piece that runs the edge backwards (kNoTriangle is none)
+      if (holds(piece_triangle_, piece_count_, bounder_.across_[of][e])) continue;
       const Vec3d &from = output[of][e + 1 == 3 ? 0 : e + 1], &to = output[of][e];
       bool across = false;
       for (std::size_t j = 0; j < piece_count_ && !across; ++j) {
