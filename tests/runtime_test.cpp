@@ -856,6 +856,24 @@ TEST(Disk, WalkCommandReplaysAPathAndReportsJson) {
 
 // --- open -------------------------------------------------------------------------------------
 
+// A manifest built in code gets the checks read_manifest makes: a child index out of range would
+// be read past the nodes, a cycle walked forever, an absolute file read outside the tree.
+TEST(Open, RejectsAManifestThatIsNotATree) {
+  const SyntheticTree t = make_full_octree(2);
+  auto executor = std::make_shared<SynchronousExecutor>();
+  Manifest out_of_range = t.manifest, cycle = t.manifest, outside = t.manifest;
+  out_of_range.nodes[0].children[3] = 99;
+  cycle.nodes[1].children[0] = 0;
+  outside.nodes[2].lods[0].file = "/etc/passwd";
+  for (const Manifest* m : {&out_of_range, &cycle, &outside}) {
+    auto opened = StreamingTree::open(*m, t.source, executor, {});
+    ASSERT_FALSE(opened.ok());
+    EXPECT_EQ(opened.status().code(), ErrorCode::bad_input);
+    EXPECT_NE(opened.status().message().find("StreamingTree::open: invalid manifest"), std::string::npos)
+        << opened.status().message();
+  }
+}
+
 TEST(Open, RejectsMeaninglessOptions) {
   SyntheticTree tree = make_full_octree(2);
   auto executor = std::make_shared<SynchronousExecutor>();

@@ -76,7 +76,9 @@ bool safe_relative(const std::string& p) {
   return true;
 }
 
-Status validate(const Manifest& m, std::string_view name) {
+}  // namespace
+
+Status validate_manifest(const Manifest& m, std::string_view name) {
   if (m.nodes.empty()) return invalid(name, "no nodes");
   const auto count = static_cast<std::int64_t>(m.nodes.size());
   for (std::size_t i = 0; i < m.nodes.size(); ++i) {
@@ -110,6 +112,8 @@ Status validate(const Manifest& m, std::string_view name) {
   }
   return {};
 }
+
+namespace {
 
 
 // `value` as json::dump(1) writes it at nesting `level`: continuation lines get `level` more
@@ -267,7 +271,7 @@ Result<Manifest> manifest_from_reader(const Read& read, std::string_view name) {
     return invalid(name, (doc.is_object() ? "" : "not a JSON object: ") +
                              (tag_end == std::string::npos ? what : what.substr(tag_end + 2)));
   }
-  OCTOLOD_RETURN_IF_ERROR(validate(m, name));
+  OCTOLOD_RETURN_IF_ERROR(validate_manifest(m, name));
   return m;
 }
 

@@ -572,6 +572,9 @@ Result<std::unique_ptr<StreamingTree>> StreamingTree::open(Manifest manifest,
   if (!source) return usage_error("StreamingTree::open needs a NodeSource");
   if (!executor) return usage_error("StreamingTree::open needs an Executor");
   OCTOLOD_RETURN_IF_ERROR(validate(options));
+  // the layout walks the links (a cycle would never end) and the loaders read lod.file below the
+  // source's root
+  OCTOLOD_RETURN_IF_ERROR(validate_manifest(manifest, "StreamingTree::open"));
   auto shared = std::make_shared<const Manifest>(std::move(manifest));
   Result<TreeLayout> tree = build_tree_layout(*shared);
   if (!tree.ok()) return tree.status();

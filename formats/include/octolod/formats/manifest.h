@@ -85,8 +85,12 @@ std::string manifest_to_json(const Manifest& manifest);
 // The manifest's "parameters" object as compact JSON text (the same keys and values the manifest
 // holds), for tools that report a tree's bake parameters.
 std::string bake_parameters_to_json(const BakeParameters& parameters);
-// Parses and validates (indices in range, parent/child links consistent, depths, files
-// relative and without "..").
+// bad_input naming `name` unless `manifest` is a tree: nodes (at least the root) whose parents
+// precede them, parent/child links consistent and in range, depths one below the parent's, LOD
+// files relative and without "..", errors not negative or NaN. Every reader below checks it; a
+// manifest built in code is checked by StreamingTree::open.
+Status validate_manifest(const Manifest& manifest, std::string_view name);
+// Parses and validates (validate_manifest).
 Result<Manifest> manifest_from_json(std::string_view text, std::string_view name);
 
 // write_manifest writes atomically (temporary sibling + rename).

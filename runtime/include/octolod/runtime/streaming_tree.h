@@ -163,7 +163,9 @@ class StreamingTree {
   // Plans from `manifest` alone; loads nothing yet (the root's coarsest LOD is requested first
   // by the first update() and stays pinned once loaded; a root without LODs just means holes until
   // deeper nodes arrive). Fails with ErrorCode::usage on meaningless options or a budget that
-  // cannot hold the root's coarsest LOD, ErrorCode::bad_input on a manifest without geometry.
+  // cannot hold the root's coarsest LOD, ErrorCode::bad_input on a manifest that is not a tree
+  // (validate_manifest: links out of range or cyclic, a LOD file outside the tree) or without
+  // geometry.
   static Result<std::unique_ptr<StreamingTree>> open(Manifest manifest,
                                                      std::shared_ptr<const NodeSource> source,
                                                      std::shared_ptr<Executor> executor,
