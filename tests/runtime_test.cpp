@@ -14,6 +14,7 @@
 #include <cmath>
 #include <deque>
 #include <functional>
+#include <future>
 #include <limits>
 #include <stdexcept>
 #include <cstdlib>
@@ -567,6 +568,15 @@ TEST(Paging, PrefetchPlanningSpreadOverFramesReachesEveryNeighbour) {
   for (const char* path : {"0", "3", "7"}) EXPECT_TRUE(fx.streaming->is_resident(fx.tree.node_at(path), 1)) << path;
   for (const char* path : {"0/0", "3/5", "7/7"}) EXPECT_TRUE(fx.streaming->is_resident(fx.tree.node_at(path), 1)) << path;
   EXPECT_LE(most_prefetches, 9u);  // one cut entry's neighbours at a time
+}
+
+TEST(Executor, AThreadPoolOfZeroThreadsStillRunsItsTasks) {
+  std::promise<void> ran;
+  {
+    ThreadPoolExecutor pool(0);
+    pool.post([&] { ran.set_value(); });
+  }  // the destructor runs every posted task
+  EXPECT_EQ(ran.get_future().wait_for(std::chrono::seconds(0)), std::future_status::ready);
 }
 
 TEST(Paging, ThreadPoolLoadsConvergeToTheReferenceCut) {

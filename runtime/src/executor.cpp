@@ -1,15 +1,16 @@
 // The two Executors the runtime ships with: loader threads for games, a manual queue for tests.
 #include "octolod/runtime/executor.h"
 
-#include <cassert>
+#include <algorithm>
 #include <utility>
 
 namespace octolod::runtime {
 
 ThreadPoolExecutor::ThreadPoolExecutor(unsigned threads) {
-  assert(threads > 0 && "ThreadPoolExecutor needs at least one thread");
-  threads_.reserve(threads);
-  for (unsigned i = 0; i < threads; ++i) threads_.emplace_back([this] { run(); });
+  // 0 would never run a posted task, and every StreamingTree on it would stop loading
+  const unsigned count = std::max(threads, 1u);
+  threads_.reserve(count);
+  for (unsigned i = 0; i < count; ++i) threads_.emplace_back([this] { run(); });
 }
 
 ThreadPoolExecutor::~ThreadPoolExecutor() {

@@ -22,8 +22,8 @@ class Executor {
   virtual void post(std::function<void()> task) = 0;
 };
 
-// `threads` loader threads draining a FIFO queue. The destructor runs every task already posted,
-// then joins the threads.
+// `threads` loader threads (at least one) draining a FIFO queue. The destructor runs every task
+// already posted, then joins the threads.
 class ThreadPoolExecutor final : public Executor {
  public:
   explicit ThreadPoolExecutor(unsigned threads);
