@@ -4,9 +4,18 @@ include_guard(GLOBAL)
 option(OCTOLOD_WERROR "Treat compiler warnings as errors" OFF)
 option(OCTOLOD_SANITIZE "Build with AddressSanitizer + UndefinedBehaviorSanitizer" OFF)
 
+option(OCTOLOD_SANITIZE_THREAD "Build with ThreadSanitizer (not with OCTOLOD_SANITIZE)" OFF)
+
+if(OCTOLOD_SANITIZE AND OCTOLOD_SANITIZE_THREAD)
+  message(FATAL_ERROR "OCTOLOD_SANITIZE and OCTOLOD_SANITIZE_THREAD cannot be combined")
+endif()
 if(OCTOLOD_SANITIZE)
   add_compile_options(-fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=undefined)
   add_link_options(-fsanitize=address,undefined)
+endif()
+if(OCTOLOD_SANITIZE_THREAD)
+  add_compile_options(-fsanitize=thread -fno-omit-frame-pointer)
+  add_link_options(-fsanitize=thread)
 endif()
 
 function(octolod_configure_target target)

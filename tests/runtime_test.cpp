@@ -425,7 +425,7 @@ TEST(Paging, NeededLoadsComeBeforePrefetchesAndHigherPriorityFirst) {
   fx.streaming->update(front(100.0f));
   fx.executor->run_pending();  // root
   // The root stands in for the 64 wanted leaves: first the coarsest LOD of every leaf's parent
-  // (so that a fallback there covers one octant), then the leaves, nearest first (z high);
+  // (so that a fallback there covers one octant), then the leaves, each nearest first (z high);
   // prefetches never outrank needed loads.
   auto resident_lods = [&](std::uint32_t depth, std::uint32_t lod) {
     std::vector<std::uint32_t> found;
@@ -433,11 +433,16 @@ TEST(Paging, NeededLoadsComeBeforePrefetchesAndHigherPriorityFirst) {
       if (fx.tree.manifest.nodes[n].depth == depth && fx.streaming->is_resident(n, lod)) found.push_back(n);
     return found;
   };
-  for (int i = 0; i < 8; ++i) {
-    fx.streaming->update(front(100.0f));
-    fx.executor->run_pending();
-  }
   fx.streaming->update(front(100.0f));
+  fx.executor->run_pending();
+  fx.streaming->update(front(100.0f));
+  const std::vector<std::uint32_t> first = resident_lods(1, 1);
+  ASSERT_EQ(first.size(), 1u);
+  EXPECT_EQ(fx.tree.manifest.nodes[first[0]].cell.max[2], 64.0f) << fx.tree.manifest.nodes[first[0]].path;
+  for (int i = 1; i < 8; ++i) {
+    fx.executor->run_pending();
+    fx.streaming->update(front(100.0f));
+  }
   EXPECT_EQ(resident_lods(1, 1).size(), 8u);
   EXPECT_TRUE(resident_lods(1, 0).empty());
   EXPECT_TRUE(resident_lods(2, 0).empty());

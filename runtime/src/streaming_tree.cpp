@@ -28,11 +28,12 @@ double thread_cpu_ms() {
   return static_cast<double>(t.tv_sec) * 1e3 + static_cast<double>(t.tv_nsec) * 1e-6;
 }
 
-// Added to the priority of a load whose region has nothing resident to draw at all.
-constexpr float kHolePriority = 1e30f;
-// Added to the priority of a parent whose absence made an ancestor above it replace a whole
-// subtree (request_parent_fallback): after holes, before any LOD that only adds detail.
-constexpr float kFallbackPriority = 1e20f;
+// How urgent a load is, before its priority (its size on screen) among loads equally urgent.
+enum Urgency : std::uint8_t {
+  kDetail = 0,    // a wanted or prefetched LOD
+  kFallback = 1,  // a parent whose absence made an ancestor above it replace a whole subtree
+  kHole = 2,      // a region with nothing resident to draw at all
+};
 
 Status validate(const StreamingOptions& o) {
   if (o.max_resident_bytes == 0) return usage_error("max_resident_bytes must be positive");
@@ -66,6 +67,7 @@ struct StreamingTree::Impl {
   struct Candidate {
     float priority;
     std::uint32_t slot;
+    Urgency urgency = kDetail;
   };
 
   // `t` was built from `*m`.
@@ -319,7 +321,7 @@ void StreamingTree::Impl::resolve(const SelectionView& view, FrameStats& stats) 
       continue;
     }
     ++stats.holes;
-    if (candidate < needed.size()) needed[candidate].priority += kHolePriority;
+    if (candidate < needed.size()) needed[candidate].urgency = kHole;
   }
 }
 
@@ -399,8 +401,8 @@ void StreamingTree::Impl::request_nearest_ancestor(const WantedLod& wanted) {
 }
 
 // An ancestor above the parent replaced the node's whole subtree, resident siblings and all:
-// the parent's coarsest LOD (a few hundred triangles) is asked for before any detail (nearest
-// first among such parents), and the next fallback there covers the parent's children only.
+// the parent's coarsest LOD (a few hundred triangles) is asked for before any detail (largest on
+// screen first among such parents), and the next fallback there covers the parent's children only.
 // Without it a camera turning to a region whose middle levels were reclaimed drew the root alone
 // until every wanted LOD below it had arrived.
 void StreamingTree::Impl::request_parent_fallback(const WantedLod& wanted, const SelectionView& view) {
@@ -413,7 +415,7 @@ void StreamingTree::Impl::request_parent_fallback(const WantedLod& wanted, const
   if (cache.state(slot) == SlotState::absent && candidate_mark[slot] != frame) {
     candidate_mark[slot] = frame;
     const float size = 2.0f * glm::length(n.half) * view.pixels_per_unit / distance_to_node(tree, parent, view.eye);
-    needed.push_back({kFallbackPriority + size, slot});
+    needed.push_back({size, slot, kFallback});
   }
 }
 
@@ -516,6 +518,7 @@ void StreamingTree::Impl::issue_loads(const SelectionView& view, const Camera& c
 
   if (root_slot != kNoSlot) issue(root_slot, kNoSlot, stats);
   auto by_priority = [](const Candidate& a, const Candidate& b) {
+    if (a.urgency != b.urgency) return a.urgency > b.urgency;
     return a.priority > b.priority || (a.priority == b.priority && a.slot < b.slot);
   };
   std::sort(needed.begin(), needed.end(), by_priority);
