@@ -608,9 +608,9 @@ TEST_F(BakeTest, ATooSmallBudgetNamesTheBudgetThatSuffices) {
   EXPECT_TRUE(bake(o).ok());
 }
 
-// Every node thread takes kNodeThreadBytes of the budget. A count the caller asks for that the
-// budget cannot hold is refused by name; the machine's count (threads 0) gives way to the
-// budget instead: where 2 threads are refused, it bakes on 1.
+// Every thread past the second takes kNodeThreadBytes of the budget. A count the caller asks for
+// that the budget cannot hold is refused by name; the machine's count (threads 0) gives way to
+// the budget instead: where 2 threads are refused, it bakes on 1.
 TEST_F(BakeTest, NodeThreadsTakeTheirShareOfTheBudget) {
   BakeOptions o = options("out");
   o.threads = 1000;

@@ -86,12 +86,13 @@ struct OctreeBudget {
 // Node work threads besides the caller, for `threads` in all (the caller works too).
 unsigned lod_workers(unsigned threads) { return threads > 1 ? threads - 1 : 0; }
 
-// What each node thread holds beyond its nodes' estimates (node_work_bytes): the free memory its
-// malloc arena keeps (glibc trims an arena's top only past 128 KiB) and its stack's touched
-// pages. Measured as the growth of the 1M rock's peak RSS at --memory 64M: 14 MiB from 2 to 128
-// threads (110 KiB per thread), 2.3 MiB more at 256, when the node work limit leaves the extra
-// threads idle (--method none: no growth).
+// What each thread past the second holds beyond its nodes' estimates (node_work_bytes, measured
+// on two threads): the free memory its malloc arena keeps (glibc trims an arena's top only past
+// 128 KiB) and its stack's touched pages. Measured as the growth of the 1M rock's peak RSS at
+// --memory 64M: 14 MiB from 2 to 128 threads (110 KiB per thread), 2.3 MiB more at 256, when the
+// node work limit leaves the extra threads idle (--method none: no growth).
 constexpr std::uint64_t kNodeThreadBytes = 128 << 10;
+constexpr std::uint64_t kThreadsInTheEstimates = 2;
 
 // The input's triangle count when the budget is divided before it is known.
 constexpr std::uint64_t kUnknownTriangles = std::numeric_limits<std::uint64_t>::max();
@@ -132,7 +133,8 @@ Result<OctreeBudget> divide_octree_budget(const BakeOptions& options, VertexLayo
   const std::uint64_t work =
       options.lods ? max_node_work_bytes(b.merge_bytes, static_cast<std::size_t>(largest_leaf)) : threads * leaf;
   if (options.lods) b.work_bytes = static_cast<std::size_t>(work);
-  const std::uint64_t thread_bytes = options.lods ? threads * kNodeThreadBytes : 0;
+  const std::uint64_t thread_bytes =
+      options.lods && threads > kThreadsInTheEstimates ? (threads - kThreadsInTheEstimates) * kNodeThreadBytes : 0;
   const std::uint64_t reserve =
       b.io_bytes + (workers ? b.queue_bytes : 0) + b.keep_bytes + work + 2 * leaf + thread_bytes;
   // the sort keeps at least a quarter of the budget

@@ -89,7 +89,7 @@ void add_bake_command(CLI::App& app, CommandContext& context) {
   command->add_option("--work-dir", args->work_dir,
                       "Directory for temporary files (default: next to the output)");
   command->add_option("--threads", args->threads,
-                      "Worker threads, up to 1024; each node thread takes 128 KiB of --memory (default or 0: all "
+                      "Worker threads, up to 1024; each past the second takes 128 KiB of --memory (default or 0: all "
                       "cores, fewer if the budget cannot hold them)")
       ->check(CLI::Range(0u, kMaxThreads));
   command

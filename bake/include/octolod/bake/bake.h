@@ -101,9 +101,9 @@ struct BakeOptions {
   // the output. Needs room for about two soups (3 x vertex bytes + 4 per triangle, twice).
   std::filesystem::path work_dir;
   // Threads for the sorts and the node work; 0 = hardware concurrency, or fewer when the memory
-  // budget cannot hold that many node threads (each reserves 128 KiB; the manifest records the
-  // count used). A count given here that the budget cannot hold is refused (usage). The output
-  // does not depend on it.
+  // budget cannot hold that many threads (each past the second reserves 128 KiB; the manifest
+  // records the count used). A count given here that the budget cannot hold is refused (usage).
+  // The output does not depend on it.
   unsigned threads = 0;
   // Take the soup stage's out-of-core path even when the vertices would fit (tests, benchmarks).
   bool force_out_of_core = false;
