@@ -235,8 +235,8 @@ void StreamingTree::Impl::hand_out_draws(FrameStats& stats) {
 // the budget. Starts one step finer than the last frame's factor, so a steady view costs one or
 // two selections and the factor returns to 1 when the view allows.
 // The factor never passes kMaxCoarsening, so a view that no factor fits (the pinned root alone
-// over the limit, a tree without coarse LODs) costs two selections per frame, and the factor
-// comes back down in as many frames as it took to climb once the view allows.
+// over the limit, a tree without coarse LODs) costs two selections per frame, and once the view
+// allows the factor comes back down one step per frame.
 SelectionCounters StreamingTree::Impl::select_within_budget(SelectionView& view) {
   constexpr float kStep = 1.5f;
   constexpr float kMaxCoarsening = 1.1e7f;  // about 1.5^40: beyond any tree's error range
