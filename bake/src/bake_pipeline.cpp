@@ -695,7 +695,7 @@ Result<BakeReport> run_bake(const BakeOptions& given) {
       input_triangles = triangles.value();
       budget = divide_octree_budget(options, info.layout, lod_workers(threads), input_triangles);
     }
-    // a thread count of the machine's gives way to the budget (each node thread costs
+    // a thread count of the machine's gives way to the budget (each thread past the second costs
     // kNodeThreadBytes): a default bake on a many-core machine runs on fewer threads rather than
     // being refused; a count the caller asked for is refused instead
     while (!budget.ok() && options.threads == 0 && threads > 1) {
@@ -776,7 +776,7 @@ Result<BakeReport> run_bake(const BakeOptions& given) {
     manifest.stats["octree_sort_runs"] = static_cast<double>(octree->sort.runs);
     manifest.stats["octree_sort_merge_passes"] = octree->sort.merge_passes;
     manifest.stats["soup_streamed_to_sort"] = octree->soup_streamed ? 1 : 0;
-    report.nodes = std::max<std::size_t>(octree->nodes.size(), 1);
+    report.nodes = octree->nodes.size();
     report.leaves = octree->lod_stats.leaves;
     report.depth = octree->lod_stats.depth;
     manifest.stats["nodes"] = static_cast<double>(report.nodes);
