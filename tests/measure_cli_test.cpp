@@ -298,6 +298,23 @@ TEST(ExtractCli, LevelZeroIsTheRootLod) {
   EXPECT_EQ(r["lods"][0]["lod"], 0);
 }
 
+// A level below the tree's deepest node is a mistake, not a request for the leaves: refused
+// (usage, nothing written), naming the deepest level; the deepest level itself is the leaves.
+TEST(ExtractCli, LevelDeeperThanTheTreeIsRefused) {
+  SKIP_WITHOUT_CLI();
+  TempDir dir;
+  write_tree(dir / "tree");
+  const std::string out = (dir / "cut.ply").string();
+  const CliRun deep = run_cli(dir, "extract " + (dir / "tree").string() + " --level 2 -o " + out);
+  EXPECT_EQ(deep.code, 1) << deep.err;
+  EXPECT_NE(deep.err.find("--level 2: the deepest level of " + (dir / "tree").string() + " is 1"), std::string::npos)
+      << deep.err;
+  EXPECT_FALSE(std::filesystem::exists(out));
+  const CliRun leaves = run_cli(dir, "--json extract " + (dir / "tree").string() + " --level 1 -o " + out);
+  ASSERT_EQ(leaves.code, 0) << leaves.err;
+  EXPECT_EQ(json::parse(leaves.out)["node_lods"], 2);
+}
+
 // Positions are floats: a model far from the origin (here 1 unit across, 4 million units out,
 // where floats are 0.25 apart) bakes, and the bake says so on stderr; at the origin it does not.
 TEST(BakeCli, WarnsWhenFloatsAreCoarseFarFromTheOrigin) {

@@ -56,7 +56,7 @@ void add_cut_options(CLI::App& command, CutChoice& choice) {
       command.add_option("--error", choice.error,
                          "Per node, the coarsest LOD whose stored error is <= E (model units)");
   CLI::Option* level = command.add_option(
-      "--level", choice.level, "The nodes at octree depth K (and leaves above it), finest LOD each");
+      "--level", choice.level, "The nodes at octree depth K (and leaves above it), finest LOD each; K at most the tree's deepest level");
   error->excludes(level);
 }
 

@@ -1,6 +1,7 @@
 // The `--error E | --level K` choice of a uniform cut (cut_choice.h).
 #include "cut_choice.h"
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 #include <utility>
@@ -18,6 +19,13 @@ Status check_cut_choice(const CutChoice& choice, std::string_view command_name) 
 Result<ChosenCut> read_chosen_cut(const std::filesystem::path& tree, const CutChoice& choice) {
   Result<Manifest> manifest = read_tree_manifest(tree);
   if (!manifest.ok()) return manifest.status();
+  if (choice.level) {
+    std::uint32_t deepest = 0;
+    for (const NodeInfo& node : manifest->nodes) deepest = std::max(deepest, node.depth);
+    if (*choice.level > deepest)
+      return usage_error("--level " + std::to_string(*choice.level) + ": the deepest level of " + tree.string() +
+                         " is " + std::to_string(deepest) + " (the root is 0)");
+  }
   std::vector<CutEntry> cut =
       choice.error ? uniform_error_cut(manifest.value(), *choice.error) : depth_cut(manifest.value(), *choice.level);
   if (cut.empty())

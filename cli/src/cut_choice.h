@@ -30,8 +30,9 @@ struct ChosenCut {
 };
 
 // Reads the manifest of the tree at `tree` (its directory) and selects the cut `choice` gives
-// (after check_cut_choice). Errors: those of read_tree_manifest, and bad_input naming `tree` when
-// the tree has no node LOD to cut (an empty mesh was baked).
+// (after check_cut_choice). Errors: those of read_tree_manifest, a usage error when the level is
+// deeper than the tree's deepest node, and bad_input naming `tree` when the tree
+// has no node LOD to cut (an empty mesh was baked).
 Result<ChosenCut> read_chosen_cut(const std::filesystem::path& tree, const CutChoice& choice);
 
 }  // namespace octolod::cli
