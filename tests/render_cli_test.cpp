@@ -407,14 +407,10 @@ TEST_F(RenderCli, AnOutputThatIsNotARegularFileIsRefusedAndKept) {
   std::filesystem::remove_all(dir);
 }
 
-// A node file that fails to load (here: every one, its middle byte flipped) fails the
-// command naming the file, and no picture is written: a damaged tree is bad input, not a picture
-// of fallbacks.
-TEST_F(RenderCli, ANodeFileThatFailsToLoadIsBadInputAndWritesNothing) {
-  const auto dir = scratch_dir("damaged");
-  runtime::testing::write_tree(runtime::testing::make_full_octree(2), dir / "tree");
+// Flips the middle byte of every node file of the tree at `tree`; returns how many there were.
+std::size_t damage_node_files(const std::filesystem::path& tree) {
   std::size_t damaged = 0;
-  for (const auto& entry : std::filesystem::recursive_directory_iterator(dir / "tree")) {
+  for (const auto& entry : std::filesystem::recursive_directory_iterator(tree)) {
     if (!entry.is_regular_file() || entry.path().filename() == "manifest.json") continue;
     const auto middle = static_cast<std::streamoff>(std::filesystem::file_size(entry.path()) / 2);
     std::fstream file(entry.path(), std::ios::in | std::ios::out | std::ios::binary);
@@ -424,7 +420,16 @@ TEST_F(RenderCli, ANodeFileThatFailsToLoadIsBadInputAndWritesNothing) {
     file.put(byte);
     ++damaged;
   }
-  ASSERT_GT(damaged, 0u);
+  return damaged;
+}
+
+// A node file that fails to load (here: every one, its middle byte flipped) fails the
+// command naming the file, and no picture is written: a damaged tree is bad input, not a picture
+// of fallbacks.
+TEST_F(RenderCli, ANodeFileThatFailsToLoadIsBadInputAndWritesNothing) {
+  const auto dir = scratch_dir("damaged");
+  runtime::testing::write_tree(runtime::testing::make_full_octree(2), dir / "tree");
+  ASSERT_GT(damage_node_files(dir / "tree"), 0u);
   const auto png = dir / "frame.png";
   EXPECT_EQ(octolod("render " + (dir / "tree").string() + " -o " + png.string(), dir).exit_code, 2);
   EXPECT_FALSE(std::filesystem::exists(png));
@@ -476,6 +481,22 @@ TEST_F(RenderCli, WalkFramesPngWritesEveryKthFrame) {
   const Picture last = read_png(frames / "frame_000020.png");
   EXPECT_EQ(last.width, 960);
   EXPECT_EQ(last.height, 540);
+  std::filesystem::remove_all(dir);
+}
+
+// A walk over a damaged tree still reports what it measured (the failed loads among it), but
+// exits as bad input, naming the files: a script must not take it for a clean run.
+TEST_F(RenderCli, WalkOverADamagedTreeReportsAndFails) {
+  const auto dir = scratch_dir("walk_damaged");
+  runtime::testing::write_tree(runtime::testing::make_full_octree(2), dir / "tree");
+  ASSERT_GT(damage_node_files(dir / "tree"), 0u);
+  // a second of replay at 60 fps: the loader threads have long tried these small files by its end
+  const CliRun run = octolod("--json walk " + (dir / "tree").string() + " --path orbit --frames 60 --fps 60", dir);
+  EXPECT_EQ(run.exit_code, 2);
+  EXPECT_GT(run.json.at("loads_failed").get<int>(), 0);
+  const std::string errors = file_text(dir / "stderr.txt");
+  EXPECT_NE(errors.find("lod0.bin"), std::string::npos) << errors;
+  EXPECT_NE(errors.find("node LOD(s) failed to load"), std::string::npos) << errors;
   std::filesystem::remove_all(dir);
 }
 

@@ -17,6 +17,7 @@
 #include "frame_render.h"
 #include "offscreen_renderer.h"
 #include "octolod/runtime/streaming_tree.h"
+#include "streaming_setup.h"
 #include "view_camera.h"
 
 namespace octolod::cli {
@@ -62,9 +63,8 @@ struct LevelCount {
 }  // namespace
 
 int run_render(const RenderArgs& args, const CommandContext& context) {
-  Result<std::uint64_t> budget = parse_byte_size(args.budget);
-  if (!budget.ok()) return report(budget.status());
-  if (budget.value() == 0) return report(usage_error("--budget must be at least one byte"));
+  Result<runtime::StreamingOptions> streaming = streaming_options(args.budget, args.sse);
+  if (!streaming.ok()) return report(streaming.status());
   if (args.width < 16 || args.width > 8192 || args.height < 16 || args.height > 8192)
     return report(usage_error("--width and --height must be within 16..8192 pixels"));
   if (!(args.fov_degrees > 1.0 && args.fov_degrees < 179.0))
@@ -72,14 +72,9 @@ int run_render(const RenderArgs& args, const CommandContext& context) {
   if (args.output.empty()) return report(usage_error("-o FILE.png is required"));
 
   const auto start = std::chrono::steady_clock::now();
-  runtime::StreamingOptions options;
-  options.max_resident_bytes = budget.value();
-  options.target_sse_pixels = args.sse;
+  runtime::StreamingOptions& options = streaming.value();  // a failed load: the command fails after the loop
   options.prefetch = false;  // one view: load what it draws, nothing around it
   options.max_loads_in_flight = kLoadsPerUpdate;
-  options.log = [](std::string_view message) {  // a failed load: the command fails after the loop
-    std::fprintf(stderr, "warning: %.*s\n", static_cast<int>(message.size()), message.data());
-  };
   auto executor = std::make_shared<runtime::SynchronousExecutor>();
   Result<std::unique_ptr<runtime::StreamingTree>> opened =
       runtime::StreamingTree::open_directory(args.tree, executor, options);
@@ -106,8 +101,7 @@ int run_render(const RenderArgs& args, const CommandContext& context) {
     failed += frame->stats.loads_failed;
   }
   if (failed > 0)
-    return report(bad_input_error(args.tree + ": " + std::to_string(failed) +
-                                  " node LOD(s) failed to load (the warnings above name them); no picture written"));
+    return report(failed_loads_error(args.tree, failed, "no picture written"));
   const runtime::FrameStats& stats = frame->stats;
   const bool complete = stats.loads_in_flight == 0 && stats.loads_issued == 0;
   if (!complete)
@@ -149,7 +143,7 @@ int run_render(const RenderArgs& args, const CommandContext& context) {
                 {"eye", {eye.x, eye.y, eye.z}},
                 {"fov_degrees", args.fov_degrees},
                 {"target_sse_pixels", args.sse},
-                {"budget_bytes", budget.value()},
+                {"budget_bytes", options.max_resident_bytes},
                 {"updates", updates},
                 {"complete", complete},
                 {"nodes_drawn", stats.drawn_nodes},

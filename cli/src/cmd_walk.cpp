@@ -1,6 +1,8 @@
 // octolod walk: replays a camera path against a baked tree at a fixed frame rate, streaming the
 // real node files through loader threads (octolod::runtime), and reports per-frame and summary
 // paging statistics — the camera-path measurements of seeds 000 and 003 and Holst & Schumann.
+// A walk over which node LODs failed to load still writes its report and outputs, then exits 2
+// (bad input): the tree is damaged, the measurement is not of a clean run.
 #include <algorithm>
 #include <cerrno>
 #include <chrono>
@@ -25,6 +27,7 @@
 #include "line_chart.h"
 #include "octolod/formats/manifest.h"
 #include "octolod/runtime/streaming_tree.h"
+#include "streaming_setup.h"
 #include "view_camera.h"
 
 namespace octolod::cli {
@@ -148,9 +151,8 @@ void write_csv_row(std::ostream& csv, std::uint32_t frame, const runtime::FrameS
 }  // namespace
 
 int run_walk(const WalkArgs& args, const CommandContext& context) {
-  Result<std::uint64_t> budget = parse_byte_size(args.budget);
-  if (!budget.ok()) return report(budget.status());
-  if (budget.value() == 0) return report(usage_error("--budget must be at least one byte"));
+  Result<runtime::StreamingOptions> streaming = streaming_options(args.budget, args.sse);
+  if (!streaming.ok()) return report(streaming.status());
   if (args.frames_png_every == 0) return report(usage_error("--frames-png-every must be at least 1"));
   for (const auto& [path, what] : {std::pair{args.csv, "the CSV"}, std::pair{args.plot, "the charts"}})
     if (!path.empty())  // before the replay: an output that has nowhere to go fails now
@@ -161,14 +163,9 @@ int run_walk(const WalkArgs& args, const CommandContext& context) {
     if (error) return report(io_error(args.frames_png + ": cannot create directory: " + error.message()));
   }
 
-  runtime::StreamingOptions options;
-  options.max_resident_bytes = budget.value();
-  options.target_sse_pixels = args.sse;
+  runtime::StreamingOptions& options = streaming.value();
   options.prefetch = !args.no_prefetch;
   options.max_loads_in_flight = args.loads_in_flight;
-  options.log = [](std::string_view message) {
-    std::fprintf(stderr, "warning: %.*s\n", static_cast<int>(message.size()), message.data());
-  };
   auto executor = std::make_shared<runtime::ThreadPoolExecutor>(args.threads);
   Result<std::unique_ptr<runtime::StreamingTree>> opened =
       runtime::StreamingTree::open_directory(args.tree, executor, options);
@@ -254,7 +251,7 @@ int run_walk(const WalkArgs& args, const CommandContext& context) {
                      {"fps", args.fps},
                      {"seconds", seconds},
                      {"threads", args.threads},
-                     {"budget_bytes", budget.value()},
+                     {"budget_bytes", options.max_resident_bytes},
                      {"target_sse_pixels", args.sse},
                      {"prefetch", !args.no_prefetch},
                      {"loads_in_flight", args.loads_in_flight},
@@ -285,7 +282,7 @@ int run_walk(const WalkArgs& args, const CommandContext& context) {
   if (!args.plot.empty()) {
     std::vector<ChartSeries> series(5);
     series[0] = {"DRAWN TRIANGLES", {}, 0x3070e0, -1};
-    series[1] = {"RESIDENT MB", {}, 0x20a050, static_cast<double>(budget.value()) / 1048576.0};
+    series[1] = {"RESIDENT MB", {}, 0x20a050, static_cast<double>(options.max_resident_bytes) / 1048576.0};
     series[2] = {"FALLBACK DRAWS", {}, 0xe07020, -1};
     series[3] = {"LOADS COMPLETED", {}, 0x8040c0, -1};
     series[4] = {"SELECTION MS", {}, 0xc03040, -1};
@@ -304,7 +301,7 @@ int run_walk(const WalkArgs& args, const CommandContext& context) {
     print_json(doc);
   } else {
     std::printf("%s: %s, %zu frames in %.1f s, budget %.1f MB, target %.2f px\n", args.tree.c_str(),
-                args.path.c_str(), stats.size(), seconds, static_cast<double>(budget.value()) / 1048576.0,
+                args.path.c_str(), stats.size(), seconds, static_cast<double>(options.max_resident_bytes) / 1048576.0,
                 args.sse);
     std::printf("  resident: max %.1f MB, mean %.1f MB; mean drawn triangles %.0f\n",
                 static_cast<double>(max_resident) / 1048576.0, resident_sum / n / 1048576.0, triangles_sum / n);
@@ -320,6 +317,7 @@ int run_walk(const WalkArgs& args, const CommandContext& context) {
                 percentile(cpu_ms, 0.5), percentile(cpu_ms, 0.99),
                 cpu_ms.empty() ? 0.0 : *std::max_element(cpu_ms.begin(), cpu_ms.end()));
   }
+  if (failed > 0) return report(failed_loads_error(args.tree, failed, "the walk drew fallbacks for them"));
   return 0;
 }
 
