@@ -48,13 +48,6 @@ glm::vec3 vec(const nlohmann::json& j) {
   return glm::vec3(j.at(0).get<float>(), j.at(1).get<float>(), j.at(2).get<float>());
 }
 
-// nlohmann's message without its "[json.exception.parse_error.101] " tag.
-std::string json_message(const nlohmann::json::exception& e) {
-  const std::string what = e.what();
-  const std::size_t tag_end = what.find("] ");
-  return tag_end == std::string::npos ? what : what.substr(tag_end + 2);
-}
-
 // {"keyframes": [{"eye": [x,y,z], "target": [x,y,z]}, ...]} in model units, at least two.
 Result<std::vector<Key>> read_keyframes(const std::string& file) {
   std::error_code error;
@@ -67,14 +60,14 @@ Result<std::vector<Key>> read_keyframes(const std::string& file) {
   try {
     doc = nlohmann::json::parse(in);  // its errors give the line and column
   } catch (const nlohmann::json::exception& e) {
-    return bad_input_error(file + ": not valid JSON: " + json_message(e));
+    return bad_input_error(file + ": not valid JSON: " + without_json_tag(e.what()));
   }
   std::vector<Key> keys;
   try {
     for (const auto& k : doc.at("keyframes")) keys.push_back({vec(k.at("eye")), vec(k.at("target"))});
   } catch (const nlohmann::json::exception& e) {
     return bad_input_error(file + ": expected {\"keyframes\": [{\"eye\": [x,y,z], \"target\": [x,y,z]}, ...]}: " +
-                           json_message(e));
+                           without_json_tag(e.what()));
   }
   if (keys.size() < 2) return bad_input_error(file + ": a camera path needs at least two keyframes");
   return keys;

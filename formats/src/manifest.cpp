@@ -264,12 +264,8 @@ Result<Manifest> manifest_from_reader(const Read& read, std::string_view name) {
     m.stats = doc.at("stats").get<std::map<std::string, double>>();
     if (!doc.at("nodes").is_array()) return invalid(name, "\"nodes\" is not an array");
   } catch (const json::exception& e) {
-    // nlohmann reports missing keys and type mismatches by exception; convert at this boundary,
-    // without its "[json.exception.type_error.304] " tag
-    const std::string what = e.what();
-    const std::size_t tag_end = what.find("] ");
-    return invalid(name, (doc.is_object() ? "" : "not a JSON object: ") +
-                             (tag_end == std::string::npos ? what : what.substr(tag_end + 2)));
+    // nlohmann reports missing keys and type mismatches by exception; convert at this boundary
+    return invalid(name, (doc.is_object() ? "" : "not a JSON object: ") + without_json_tag(e.what()));
   }
   OCTOLOD_RETURN_IF_ERROR(validate_manifest(m, name));
   return m;

@@ -10,7 +10,6 @@
 #include <array>
 #include <bit>
 #include <cmath>
-#include <cstdio>
 #include <initializer_list>
 #include <limits>
 #include <optional>
@@ -381,12 +380,9 @@ class StreamReader final : public PlyReader {
                                      (std::isnan(converted) ? "NaN" : "Inf") +
                                      (std::isfinite(value) ? " after conversion to float" : "") +
                                      ")");
-        if (std::abs(converted) > kMaxVertexValue) {
-          char shown[32];
-          std::snprintf(shown, sizeof(shown), "%g", static_cast<double>(converted));
-          return error_at(where, "vertex " + std::to_string(index_) + " has a " + p.property.name +
-                                     " of " + shown + ", beyond ±1e18 (squared distances that far out overflow float)");
-        }
+        if (std::abs(converted) > kMaxVertexValue)
+          return error_at(where, "vertex " + std::to_string(index_) + " has a " + p.property.name + " of " +
+                                     beyond_max_vertex_value(converted));
         vertex[p.slot] = converted;
       }
       OCTOLOD_RETURN_IF_ERROR(source_.end_entry());

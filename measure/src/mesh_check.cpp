@@ -1,7 +1,6 @@
 #include "mesh_check.h"
 
 #include <cmath>
-#include <cstdio>
 #include <string>
 
 namespace octolod::measure {
@@ -27,12 +26,9 @@ Status check_mesh(const NodeMesh& mesh, std::string_view name) {
       if (!std::isfinite(c))
         return bad_input_error(std::string(name) + ": vertex " + std::to_string(v) +
                                " has a non-finite coordinate");
-      if (std::abs(c) > kMaxVertexValue) {
-        char value[32];
-        std::snprintf(value, sizeof(value), "%g", static_cast<double>(c));
+      if (std::abs(c) > kMaxVertexValue)
         return bad_input_error(std::string(name) + ": vertex " + std::to_string(v) + " has a coordinate of " +
-                               value + ", beyond ±1e18: distances that far out overflow float");
-      }
+                               beyond_max_vertex_value(c));
     }
   return {};
 }

@@ -69,6 +69,13 @@ class [[nodiscard]] Result {
   Status status_;
 };
 
+// The message of a nlohmann::json exception (its what()) without the library's
+// "[json.exception.parse_error.101] " tag: what the errors that quote it show a user.
+inline std::string without_json_tag(const std::string& what) {
+  const std::size_t tag_end = what.find("] ");
+  return tag_end == std::string::npos ? what : what.substr(tag_end + 2);
+}
+
 }  // namespace octolod
 
 // Propagates a failed Status out of the enclosing function.

@@ -7,6 +7,7 @@
 #pragma once
 
 #include <cstdint>
+#include <cstdio>
 #include <string>
 
 namespace octolod {
@@ -16,6 +17,15 @@ namespace octolod {
 // squared stay finite in float (4e36 < 3.4e38), which the simplifier's and the measures' float
 // distances rely on: a vertex at 3e38 made both produce points far outside the model.
 inline constexpr float kMaxVertexValue = 1e18f;
+// "-2e+19, beyond ±1e18 (squared distances that far out overflow float)": a value past
+// kMaxVertexValue as the errors that refuse it name it.
+inline std::string beyond_max_vertex_value(float value) {
+  static_assert(kMaxVertexValue == 1e18f, "the message names the limit");
+  char text[96];
+  std::snprintf(text, sizeof(text), "%g, beyond ±1e18 (squared distances that far out overflow float)",
+                static_cast<double>(value));
+  return text;
+}
 
 struct VertexLayout {
   bool normal = false;
