@@ -48,7 +48,9 @@ struct Fixture {
   std::unique_ptr<StreamingTree> streaming;
   std::vector<std::string> log;
 
-  explicit Fixture(std::uint32_t levels, StreamingOptions options = {}) : tree(make_full_octree(levels)) {
+  explicit Fixture(std::uint32_t levels, StreamingOptions options = {})
+      : Fixture(make_full_octree(levels), std::move(options)) {}
+  Fixture(SyntheticTree t, StreamingOptions options) : tree(std::move(t)) {
     options.log = [this](std::string_view message) { log.emplace_back(message); };
     auto opened = StreamingTree::open(tree.manifest, tree.source, executor, std::move(options));
     EXPECT_TRUE(opened.ok()) << opened.status().message();
@@ -454,14 +456,17 @@ TEST(Paging, NeededLoadsComeBeforePrefetchesAndHigherPriorityFirst) {
 }
 
 // A valid node file that is not the one the manifest describes (LOD 1's bytes under LOD 0's
-// name: the cache budgets by the manifest's counts) fails its load like a corrupt one.
+// name, and a manifest edited to its size: the cache budgets by the manifest's counts) fails its
+// load like a corrupt one.
 TEST(Paging, ANodeFileWithOtherCountsThanTheManifestFailsItsLoad) {
-  Fixture fx(3);
-  const std::uint32_t swapped = fx.tree.node_at("7/7");
-  const NodeInfo& node = fx.tree.manifest.nodes[swapped];
-  Result<std::vector<std::byte>> coarser = fx.tree.source->read(node.lods[1].file);
+  SyntheticTree t = make_full_octree(3);
+  const std::uint32_t swapped = t.node_at("7/7");
+  NodeInfo& node = t.manifest.nodes[swapped];
+  Result<std::vector<std::byte>> coarser = t.source->read(node.lods[1].file, node.lods[1].bytes);
   ASSERT_TRUE(coarser.ok());
-  fx.tree.source->put(node.lods[0].file, coarser.value());
+  t.source->put(node.lods[0].file, coarser.value());
+  node.lods[0].bytes = node.lods[1].bytes;
+  Fixture fx(std::move(t), {});
 
   const Camera camera = front(100.0f);  // wants every leaf's LOD 0
   for (int i = 0; i < 30; ++i) {
@@ -471,7 +476,35 @@ TEST(Paging, ANodeFileWithOtherCountsThanTheManifestFailsItsLoad) {
   EXPECT_TRUE(fx.streaming->is_bad(swapped, 0));
   EXPECT_FALSE(fx.streaming->is_bad(swapped, 1));
   ASSERT_EQ(fx.log.size(), 1u);
-  EXPECT_NE(fx.log[0].find("the manifest says"), std::string::npos) << fx.log[0];
+  EXPECT_NE(fx.log[0].find("triangles and"), std::string::npos) << fx.log[0];
+}
+
+// A node file of another size than the manifest lists (here LOD 1's bytes under LOD 0's name) is
+// refused by the source before it is decoded, and the load fails like a missing file: logged
+// once with both sizes, marked bad, the node's other LOD drawn, no holes.
+TEST(Paging, ANodeFileOfAnotherSizeThanTheManifestSaysFailsItsLoad) {
+  Fixture fx(3);
+  const std::uint32_t swapped = fx.tree.node_at("7/7");
+  const NodeInfo& node = fx.tree.manifest.nodes[swapped];
+  Result<std::vector<std::byte>> coarser = fx.tree.source->read(node.lods[1].file, node.lods[1].bytes);
+  ASSERT_TRUE(coarser.ok());
+  fx.tree.source->put(node.lods[0].file, coarser.value());
+
+  const Camera camera = front(100.0f);  // wants every leaf's LOD 0
+  for (int i = 0; i < 30; ++i) {
+    const FrameResult& frame = fx.streaming->update(camera);
+    if (i > 0) expect_covering_cut(fx.tree, frame, camera);
+    fx.executor->run_pending();
+  }
+  EXPECT_TRUE(fx.streaming->is_bad(swapped, 0));
+  EXPECT_FALSE(fx.streaming->is_bad(swapped, 1));
+  ASSERT_EQ(fx.log.size(), 1u);
+  const std::string sizes = std::to_string(node.lods[1].bytes) + " bytes, the manifest says " +
+                            std::to_string(node.lods[0].bytes);
+  EXPECT_NE(fx.log[0].find(node.lods[0].file + ": " + sizes), std::string::npos) << fx.log[0];
+  const std::map<std::uint32_t, std::uint32_t> draws = draws_of(fx.streaming->update(camera));
+  ASSERT_EQ(draws.count(swapped), 1u);
+  EXPECT_EQ(draws.at(swapped), 1u);
 }
 
 TEST(Paging, CorruptNodeFileIsLoggedOnceAndAnAncestorIsDrawnForever) {
@@ -665,9 +698,9 @@ class HookedSource final : public NodeSource {
  public:
   HookedSource(std::shared_ptr<const NodeSource> inner, std::function<void()> on_read)
       : inner_(std::move(inner)), on_read_(std::move(on_read)) {}
-  Result<std::vector<std::byte>> read(std::string_view file) const override {
+  Result<std::vector<std::byte>> read(std::string_view file, std::uint64_t expected_bytes) const override {
     on_read_();
-    return inner_->read(file);
+    return inner_->read(file, expected_bytes);
   }
 
  private:
@@ -705,9 +738,9 @@ TEST(Paging, ALoadThatThrowsFailsLikeAMissingFile) {
   struct Throwing final : NodeSource {
     std::shared_ptr<const NodeSource> inner;
     std::string broken;
-    Result<std::vector<std::byte>> read(std::string_view file) const override {
+    Result<std::vector<std::byte>> read(std::string_view file, std::uint64_t expected_bytes) const override {
       if (file == broken) throw std::runtime_error("simulated failure");
-      return inner->read(file);
+      return inner->read(file, expected_bytes);
     }
   };
   auto throwing = std::make_shared<Throwing>();
@@ -831,10 +864,62 @@ TEST(Disk, CorruptAndMissingNodeFilesOnDiskFallBackToTheirAncestor) {
 
 TEST(Disk, FileSourceReportsAMissingFileAsAnIoError) {
   const FileSource source(std::filesystem::temp_directory_path());
-  Result<std::vector<std::byte>> read = source.read("octolod_no_such_dir/lod0.bin");
+  Result<std::vector<std::byte>> read = source.read("octolod_no_such_dir/lod0.bin", 100);
   ASSERT_FALSE(read.ok());
   EXPECT_EQ(read.status().code(), ErrorCode::io);
   EXPECT_NE(read.status().message().find("lod0.bin"), std::string::npos);
+}
+
+// The size is checked by fstat before anything is allocated: a sparse 1 GiB file in place of a
+// node file fails at once, naming the file and both sizes, instead of being read whole.
+TEST(Disk, FileSourceRefusesAFileOfAnotherSizeBeforeReadingIt) {
+  const auto dir = scratch_dir("size");
+  std::filesystem::create_directories(dir);
+  std::ofstream(dir / "lod0.bin", std::ios::binary) << "x";
+  std::filesystem::resize_file(dir / "lod0.bin", 1ull << 30);
+  const FileSource source(dir);
+  Result<std::vector<std::byte>> read = source.read("lod0.bin", 1000);
+  ASSERT_FALSE(read.ok());
+  EXPECT_EQ(read.status().code(), ErrorCode::bad_input);
+  EXPECT_NE(read.status().message().find("lod0.bin: 1073741824 bytes, the manifest says 1000"), std::string::npos)
+      << read.status().message();
+  std::filesystem::resize_file(dir / "lod0.bin", 1000);
+  Result<std::vector<std::byte>> right = source.read("lod0.bin", 1000);
+  ASSERT_TRUE(right.ok()) << right.status().message();
+  EXPECT_EQ(right->size(), 1000u);
+  std::filesystem::remove_all(dir);
+}
+
+// A node file on disk padded past the size the manifest lists fails its load like a missing one:
+// logged, marked bad, an ancestor drawn, no holes.
+TEST(Disk, ANodeFileLargerThanTheManifestSaysFallsBackToItsAncestor) {
+  const SyntheticTree tree = make_full_octree(3);
+  const auto dir = scratch_dir("padded");
+  testing::write_tree(tree, dir);
+  const std::uint32_t padded = tree.node_at("7/7");
+  for (const LodInfo& lod : tree.manifest.nodes[padded].lods)
+    std::ofstream(dir / lod.file, std::ios::binary | std::ios::app) << "trailing";
+
+  auto executor = std::make_shared<SynchronousExecutor>();
+  std::vector<std::string> log;
+  StreamingOptions options;
+  options.log = [&log](std::string_view message) { log.emplace_back(message); };
+  auto opened = StreamingTree::open_directory(dir, executor, options);
+  ASSERT_TRUE(opened.ok()) << opened.status().message();
+  const Camera camera = front(100.0f);  // wants all 64 leaves
+  const FrameResult& frame = settle(*opened.value(), *executor, camera);
+  EXPECT_TRUE(opened.value()->is_bad(padded, 0));
+  EXPECT_TRUE(opened.value()->is_bad(padded, 1));
+  ASSERT_EQ(log.size(), 2u);
+  const LodInfo& fine = tree.manifest.nodes[padded].lods[0];
+  const std::string sizes = std::to_string(fine.bytes + 8) + " bytes, the manifest says " + std::to_string(fine.bytes);
+  EXPECT_TRUE(std::any_of(log.begin(), log.end(), [&](const std::string& line) {
+    return line.find(fine.file + ": " + sizes) != std::string::npos;
+  })) << log[0] << "\n" << log[1];
+  EXPECT_EQ(draws_of(frame).count(tree.node_at("7")), 1u);
+  EXPECT_EQ(frame.stats.holes, 0u);
+  expect_covering_cut(tree, frame, camera);
+  std::filesystem::remove_all(dir);
 }
 
 TEST(Disk, WalkCommandReplaysAPathAndReportsJson) {

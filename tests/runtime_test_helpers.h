@@ -131,7 +131,7 @@ inline void write_tree(const SyntheticTree& t, const std::filesystem::path& dir)
   ASSERT_TRUE(write_manifest(dir / std::string(kManifestFileName), t.manifest).ok());
   for (const NodeInfo& n : t.manifest.nodes) {
     for (const LodInfo& lod : n.lods) {
-      Result<std::vector<std::byte>> bytes = t.source->read(lod.file);
+      Result<std::vector<std::byte>> bytes = t.source->read(lod.file, lod.bytes);
       ASSERT_TRUE(bytes.ok());
       const std::filesystem::path file = dir / lod.file;
       std::filesystem::create_directories(file.parent_path());
