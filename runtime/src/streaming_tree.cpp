@@ -104,7 +104,8 @@ struct StreamingTree::Impl {
   std::uint32_t consider_neighbours(const WantedLod& wanted);
   void consider_prefetch(std::uint32_t slot, float priority);
   void issue_loads(const SelectionView& view, const Camera& camera, FrameStats& stats);
-  bool issue(std::uint32_t slot, std::uint32_t protect_from_frame, FrameStats& stats);
+  enum class Issued { queued, skipped, no_room };
+  Issued issue(std::uint32_t slot, std::uint32_t protect_from_frame, FrameStats& stats);
   void log_failure(std::uint32_t slot, const Status& status) const;
 
   std::uint32_t coarsest_resident(std::uint32_t node) const {
@@ -254,7 +255,8 @@ SelectionCounters StreamingTree::Impl::select_within_budget(SelectionView& view)
   return counters;
 }
 
-// Loads that finished since the last frame become resident (on the free list until drawn).
+// Loads that finished since the last frame become resident (on the free list until drawn), in
+// the room their requests reserved.
 void StreamingTree::Impl::install_completions(FrameStats& stats) {
   loads->take_completed(completions);
   for (LoadCompletion& done : completions) {
@@ -265,10 +267,7 @@ void StreamingTree::Impl::install_completions(FrameStats& stats) {
       log_failure(done.slot, done.status);
       continue;
     }
-    if (!cache.install(done.slot, std::move(done.mesh), frame)) {
-      ++stats.loads_discarded;
-      continue;
-    }
+    cache.install(done.slot, std::move(done.mesh), frame);
     ++stats.loads_completed;
     if (done.slot == root_slot) cache.pin(done.slot);
   }
@@ -525,7 +524,7 @@ void StreamingTree::Impl::issue_loads(const SelectionView& view, const Camera& c
   // Needed loads may reclaim any free entry not wanted in this frame.
   for (const Candidate& c : needed) {
     if (requested >= options.max_loads_in_flight) break;
-    issue(c.slot, frame, stats);
+    if (issue(c.slot, frame, stats) == Issued::no_room) ++stats.loads_over_budget;
   }
   prefetch.clear();
   if (options.prefetch && requested < options.max_loads_in_flight) {
@@ -550,17 +549,20 @@ void StreamingTree::Impl::issue_loads(const SelectionView& view, const Camera& c
   for (std::uint32_t i = 0; i < tasks; ++i) executor->post([queue = loads] { queue->run_task(); });
 }
 
-bool StreamingTree::Impl::issue(std::uint32_t slot, std::uint32_t protect_from_frame,
-                                FrameStats& stats) {
-  if (requested >= options.max_loads_in_flight) return false;
-  if (cache.state(slot) != SlotState::absent) return false;
-  if (!cache.make_room(tree.slot_bytes[slot], protect_from_frame)) return false;
+// Queues a load of `slot` if it is absent and a load is free (else skipped), reserving its
+// expected bytes; no_room when the budget cannot take them even by reclaiming the free entries
+// used before `protect_from_frame`.
+StreamingTree::Impl::Issued StreamingTree::Impl::issue(std::uint32_t slot, std::uint32_t protect_from_frame,
+                                                       FrameStats& stats) {
+  if (requested >= options.max_loads_in_flight) return Issued::skipped;
+  if (cache.state(slot) != SlotState::absent) return Issued::skipped;
+  if (!cache.make_room(tree.slot_bytes[slot], protect_from_frame)) return Issued::no_room;
   cache.request(slot);
   ++requested;
   new_pending.push_back(slot);
   if (pending_mark[slot] == frame) pending_mark[slot] = 0;  // taken back and queued again
   else ++stats.loads_issued;
-  return true;
+  return Issued::queued;
 }
 
 // --- StreamingTree ------------------------------------------------------------------------------

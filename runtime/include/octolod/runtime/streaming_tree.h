@@ -126,7 +126,11 @@ struct FrameStats {
   std::uint32_t loads_completed = 0;   // loads installed this frame
   std::uint32_t loads_failed = 0;      // loads that failed this frame (node LOD marked bad)
   std::uint32_t loads_cancelled = 0;   // queued loads dropped before they started: no longer wanted
-  std::uint32_t loads_discarded = 0;   // completed loads that no longer fit the budget
+  // Needed loads not queued this frame because the budget had no room for them next to what
+  // the frame draws, what it wants and the loads in flight (they are tried again next frame).
+  // Above 0 frame after frame: max_resident_bytes is too small for this view at this
+  // max_cut_fraction (the cut fits, but not next to the fallbacks drawn while it loads).
+  std::uint32_t loads_over_budget = 0;
   std::uint32_t loads_in_flight = 0;   // queued or running after this frame
   std::uint32_t cache_hits = 0;        // wanted LODs that were resident
   std::uint32_t second_chance_hits = 0;  // of those, reclaimed from the free list without I/O
