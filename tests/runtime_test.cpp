@@ -22,6 +22,7 @@
 #include <fstream>
 #include <thread>
 
+#include <glm/gtc/matrix_transform.hpp>
 #include <nlohmann/json.hpp>
 
 #include "node_cache.h"
@@ -140,6 +141,28 @@ TEST(Selection, MatchesTheReferenceCutFromManyViewpoints) {
     EXPECT_EQ(frame.stats.fallbacks, 0u);
     expect_covering_cut(fx.tree, frame, camera);
   }
+}
+
+// The field of view that refines is the projection's, the one that culls: a camera zoomed by
+// its projection alone (20 degrees instead of 60) gets the finer reference cut of that field of
+// view, and a projection flipped for a y-down clip space (Vulkan) the same cut as unflipped.
+// Before, a separate fovy field decided the refinement, whatever the projection said.
+TEST(Selection, TheFieldOfViewComesFromTheProjection) {
+  Fixture fx(4);
+  const float narrow = glm::radians(20.0f);
+  Camera zoomed = look(glm::vec3(-40, 80, 120), kCenter);
+  zoomed.projection = glm::perspective(narrow, 1.0f, 0.01f, 10000.0f);
+  std::map<std::uint32_t, std::uint32_t> expected;
+  testing::reference_cut(fx.tree.manifest, zoomed, 2.0, 0, expected, narrow);
+  std::map<std::uint32_t, std::uint32_t> wide;
+  testing::reference_cut(fx.tree.manifest, zoomed, 2.0, 0, wide);
+  ASSERT_NE(expected, wide);  // the test tells the two fields of view apart
+  EXPECT_EQ(draws_of(fx.settle_at(zoomed)), expected);
+
+  Camera flipped = zoomed;
+  flipped.projection[1][1] = -flipped.projection[1][1];
+  EXPECT_TRUE(is_usable(flipped));
+  EXPECT_EQ(draws_of(fx.settle_at(flipped)), expected);
 }
 
 TEST(Selection, LargeNodeStraddlingTheFrustumIsKept) {
@@ -676,7 +699,7 @@ TEST(Paging, ThreadPoolLoadsConvergeToTheReferenceCut) {
 }
 
 // A camera with a NaN (lookAt with eye == target makes the view NaN), or without a field of view
-// or a viewport, is skipped: the previous frame's draws, no loads, and the next good camera
+// (a projection without vertical scale) or a viewport, is skipped: the previous frame's draws, no loads, and the next good camera
 // selects as if it had not come.
 TEST(Selection, AnUnusableCameraChangesNothing) {
   Fixture fx(3);
@@ -686,7 +709,7 @@ TEST(Selection, AnUnusableCameraChangesNothing) {
   Camera nan_eye = good;
   nan_eye.position.x = std::numeric_limits<float>::quiet_NaN();
   Camera no_fov = good;
-  no_fov.fovy_radians = 0.0f;
+  no_fov.projection[1][1] = 0.0f;
   Camera no_viewport = good;
   no_viewport.viewport_height_px = 0.0f;
   const Camera same_point = look(kCenter, kCenter);
