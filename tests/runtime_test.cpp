@@ -294,6 +294,23 @@ TEST(Paging, ACutThatNoCoarseningFitsKeepsTheFactorBounded) {
   }
 }
 
+// Every slot's LodInfo, which the loaders read the file and its size from, is that node LOD's in
+// the manifest (whose nodes are in another order than the layout's preorder). The layout used to
+// hold these pointers and gave them away to the loaders, left empty behind.
+TEST(TreeLayoutSlots, EverySlotHasItsNodeLodsInfo) {
+  const SyntheticTree t = make_full_octree(3);
+  Result<TreeLayout> layout = build_tree_layout(t.manifest);
+  ASSERT_TRUE(layout.ok()) << layout.status().message();
+  const std::vector<const LodInfo*> lods = slot_lods(t.manifest, layout.value());
+  ASSERT_EQ(lods.size(), layout->slot_error.size());
+  for (std::size_t m = 0; m < t.manifest.nodes.size(); ++m) {
+    const LayoutNode& n = layout->nodes[layout->manifest_to_internal[m]];
+    ASSERT_EQ(n.lod_count, t.manifest.nodes[m].lods.size());
+    for (std::uint32_t l = 0; l < n.lod_count; ++l)
+      EXPECT_EQ(lods[n.lod_begin + l], &t.manifest.nodes[m].lods[l]) << t.manifest.nodes[m].path << " LOD " << l;
+  }
+}
+
 // A load that cannot get its room reclaims nothing: the free entries it could have taken stay
 // as second chances. Before, it reclaimed every unprotected one and still failed.
 TEST(NodeCacheRoom, AFailedRequestReclaimsNothing) {

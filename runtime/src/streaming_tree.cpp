@@ -75,7 +75,7 @@ struct StreamingTree::Impl {
        std::shared_ptr<Executor> exec, StreamingOptions o)
       : manifest(std::move(m)), options(std::move(o)), tree(std::move(t)),
         cache(tree, options.max_resident_bytes),
-        loads(std::make_shared<LoadQueue>(std::move(source), manifest, std::move(tree.slot_lod),
+        loads(std::make_shared<LoadQueue>(std::move(source), manifest, slot_lods(*manifest, tree),
                                           manifest->layout)),
         executor(std::move(exec)),
         root_slot(tree.nodes[0].lod_count > 0 ? tree.slot_end(0) - 1 : kNoSlot),
