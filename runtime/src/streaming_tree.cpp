@@ -133,6 +133,7 @@ struct StreamingTree::Impl {
   const std::uint32_t root_slot;  // the root's coarsest LOD: requested first, pinned
   std::uint32_t frame = 0;
   std::uint32_t requested = 0;  // slots queued or loading
+  std::uint32_t cover_checks_left = 0;  // this frame's, see StreamingOptions::max_cover_checks_per_frame
   float coarsening = 1.0f;  // last frame's, the starting point of the next
   bool has_previous_eye = false;
   glm::vec3 previous_eye{0.0f};
@@ -289,6 +290,7 @@ void StreamingTree::Impl::log_failure(std::uint32_t slot, const Status& status) 
 // then replaces everything drawn below it. Missing LODs become load candidates.
 void StreamingTree::Impl::resolve(const SelectionView& view, FrameStats& stats) {
   draws.clear();
+  cover_checks_left = options.max_cover_checks_per_frame;
   std::uint32_t covered_end = 0;  // preorder nodes below this index are drawn by an ancestor
   for (const WantedLod& w : cut) {
     const bool resident = cache.resident(w.slot);
@@ -343,12 +345,19 @@ bool StreamingTree::Impl::substitute_same_node(const WantedLod& wanted) {
 }
 
 // Draws every visible child by its coarsest resident LOD, or recursively by its own children;
-// all or nothing. Subtrees without any resident LOD fail at once.
+// all or nothing. Subtrees without any resident LOD fail at once, and so does the whole cover
+// when the frame's checks (one per child looked at) run out, so that a frame's covers check at
+// most max_cover_checks_per_frame nodes.
 bool StreamingTree::Impl::cover_with_descendants(std::uint32_t node, const Frustum& frustum) {
   const LayoutNode& n = tree.nodes[node];
   if (n.child_count == 0 || cache.subtree_resident(node) == 0) return false;
   const std::size_t mark = draws.size();
   for (std::uint32_t i = 0; i < n.child_count; ++i) {
+    if (cover_checks_left == 0) {
+      draws.resize(mark);
+      return false;
+    }
+    --cover_checks_left;
     const std::uint32_t child = tree.children[n.child_begin + i];
     const LayoutNode& c = tree.nodes[child];
     if (classify_box(frustum, c.center, c.half) == Containment::outside) continue;

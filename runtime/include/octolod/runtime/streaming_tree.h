@@ -96,6 +96,15 @@ struct StreamingOptions {
   // also caps the loads started per frame. More hides latency and raises throughput; fewer keeps
   // the queue closer to the current view (more of it can be cancelled).
   std::uint32_t max_loads_in_flight = 32;
+  // A wanted LOD that is not resident may be drawn by resident descendants instead (ones that
+  // cover all of its visible part, or none), found by checking the nodes below it. This caps the
+  // nodes so checked per update(): without it a camera pulled back from a detailed view (every
+  // wanted LOD missing, the fine cut below them resident) walked the whole resident part of the
+  // tree in one frame. A cover that would need more checks is given up and the nearest resident
+  // ancestor draws there instead (coarser) until the wanted LOD arrives. Larger keeps more
+  // detail on screen while such a cut loads and costs more per frame (a check is about as cheap
+  // as a node visited by the selection); 0: descendants never stand in.
+  std::uint32_t max_cover_checks_per_frame = 4096;
   // Called once per node LOD that failed to load (missing file, checksum failure, wrong layout),
   // from the thread that calls update(). Null: silent.
   std::function<void(std::string_view message)> log;
