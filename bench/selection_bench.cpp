@@ -29,6 +29,17 @@ using namespace octolod::runtime;
 
 constexpr std::uint32_t kTriangles[2] = {256, 64};
 
+// `triangles` triangles in a strip along the diagonal of `b`.
+NodeMesh strip_mesh(const Bounds& b, std::uint32_t triangles) {
+  NodeMesh mesh;
+  for (std::uint32_t v = 0; v < triangles + 2; ++v) {
+    const float t = static_cast<float>(v) / static_cast<float>(triangles + 1);
+    for (std::size_t a = 0; a < 3; ++a) mesh.vertices.push_back(b.min[a] + t * (b.max[a] - b.min[a]));
+  }
+  for (std::uint32_t t = 0; t < triangles; ++t) mesh.indices.insert(mesh.indices.end(), {t, t + 1, t + 2});
+  return mesh;
+}
+
 bool touches_shell(const Bounds& b, float shell) {
   float near2 = 0, far2 = 0;
   for (std::size_t a = 0; a < 3; ++a) {
@@ -73,6 +84,7 @@ Manifest shell_octree(std::uint32_t max_depth, float shell) {
       lod.triangles = kTriangles[l];
       lod.vertices = kTriangles[l] + 2;
       lod.error = l == 0 ? (n.is_leaf() ? 0.0 : 0.01 * edge) : 0.04 * edge;
+      lod.bytes = node_file_size(strip_mesh(n.bounds, kTriangles[l]));
       lod.file = std::to_string(i) + "/" + std::to_string(l);
       n.lods.push_back(lod);
     }
@@ -80,24 +92,18 @@ Manifest shell_octree(std::uint32_t max_depth, float shell) {
   return m;
 }
 
-// Node files made up on demand from the file name "<node>/<lod>": a strip across the node's box.
+// Node files made up on demand from the file name "<node>/<lod>": strip_mesh of the node's box.
 class SyntheticSource final : public NodeSource {
  public:
   explicit SyntheticSource(const Manifest& m) : manifest_(m) {}
-  Result<std::vector<std::byte>> read(std::string_view file) const override {
+  Result<std::vector<std::byte>> read(std::string_view file, std::uint64_t expected_bytes) const override {
     std::size_t node = 0, lod = 0;
     const auto slash = file.find('/');
     std::from_chars(file.data(), file.data() + slash, node);
     std::from_chars(file.data() + slash + 1, file.data() + file.size(), lod);
-    const Bounds& b = manifest_.nodes[node].bounds;
-    NodeMesh mesh;
-    const std::uint32_t triangles = kTriangles[lod];
-    for (std::uint32_t v = 0; v < triangles + 2; ++v) {
-      const float t = static_cast<float>(v) / static_cast<float>(triangles + 1);
-      for (std::size_t a = 0; a < 3; ++a) mesh.vertices.push_back(b.min[a] + t * (b.max[a] - b.min[a]));
-    }
-    for (std::uint32_t t = 0; t < triangles; ++t) mesh.indices.insert(mesh.indices.end(), {t, t + 1, t + 2});
-    return encode_node_file(mesh);
+    std::vector<std::byte> bytes = encode_node_file(strip_mesh(manifest_.nodes[node].bounds, kTriangles[lod]));
+    OCTOLOD_RETURN_IF_ERROR(check_node_file_size(file, bytes.size(), expected_bytes));
+    return bytes;
   }
 
  private:

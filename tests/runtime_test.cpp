@@ -22,6 +22,7 @@
 #include <fstream>
 #include <thread>
 
+#include <glm/gtc/matrix_transform.hpp>
 #include <nlohmann/json.hpp>
 
 #include "node_cache.h"
@@ -48,7 +49,9 @@ struct Fixture {
   std::unique_ptr<StreamingTree> streaming;
   std::vector<std::string> log;
 
-  explicit Fixture(std::uint32_t levels, StreamingOptions options = {}) : tree(make_full_octree(levels)) {
+  explicit Fixture(std::uint32_t levels, StreamingOptions options = {})
+      : Fixture(make_full_octree(levels), std::move(options)) {}
+  Fixture(SyntheticTree t, StreamingOptions options) : tree(std::move(t)) {
     options.log = [this](std::string_view message) { log.emplace_back(message); };
     auto opened = StreamingTree::open(tree.manifest, tree.source, executor, std::move(options));
     EXPECT_TRUE(opened.ok()) << opened.status().message();
@@ -138,6 +141,28 @@ TEST(Selection, MatchesTheReferenceCutFromManyViewpoints) {
     EXPECT_EQ(frame.stats.fallbacks, 0u);
     expect_covering_cut(fx.tree, frame, camera);
   }
+}
+
+// The field of view that refines is the projection's, the one that culls: a camera zoomed by
+// its projection alone (20 degrees instead of 60) gets the finer reference cut of that field of
+// view, and a projection flipped for a y-down clip space (Vulkan) the same cut as unflipped.
+// Before, a separate fovy field decided the refinement, whatever the projection said.
+TEST(Selection, TheFieldOfViewComesFromTheProjection) {
+  Fixture fx(4);
+  const float narrow = glm::radians(20.0f);
+  Camera zoomed = look(glm::vec3(-40, 80, 120), kCenter);
+  zoomed.projection = glm::perspective(narrow, 1.0f, 0.01f, 10000.0f);
+  std::map<std::uint32_t, std::uint32_t> expected;
+  testing::reference_cut(fx.tree.manifest, zoomed, 2.0, 0, expected, narrow);
+  std::map<std::uint32_t, std::uint32_t> wide;
+  testing::reference_cut(fx.tree.manifest, zoomed, 2.0, 0, wide);
+  ASSERT_NE(expected, wide);  // the test tells the two fields of view apart
+  EXPECT_EQ(draws_of(fx.settle_at(zoomed)), expected);
+
+  Camera flipped = zoomed;
+  flipped.projection[1][1] = -flipped.projection[1][1];
+  EXPECT_TRUE(is_usable(flipped));
+  EXPECT_EQ(draws_of(fx.settle_at(flipped)), expected);
 }
 
 TEST(Selection, LargeNodeStraddlingTheFrustumIsKept) {
@@ -269,6 +294,23 @@ TEST(Paging, ACutThatNoCoarseningFitsKeepsTheFactorBounded) {
   }
 }
 
+// Every slot's LodInfo, which the loaders read the file and its size from, is that node LOD's in
+// the manifest (whose nodes are in another order than the layout's preorder). The layout used to
+// hold these pointers and gave them away to the loaders, left empty behind.
+TEST(TreeLayoutSlots, EverySlotHasItsNodeLodsInfo) {
+  const SyntheticTree t = make_full_octree(3);
+  Result<TreeLayout> layout = build_tree_layout(t.manifest);
+  ASSERT_TRUE(layout.ok()) << layout.status().message();
+  const std::vector<const LodInfo*> lods = slot_lods(t.manifest, layout.value());
+  ASSERT_EQ(lods.size(), layout->slot_error.size());
+  for (std::size_t m = 0; m < t.manifest.nodes.size(); ++m) {
+    const LayoutNode& n = layout->nodes[layout->manifest_to_internal[m]];
+    ASSERT_EQ(n.lod_count, t.manifest.nodes[m].lods.size());
+    for (std::uint32_t l = 0; l < n.lod_count; ++l)
+      EXPECT_EQ(lods[n.lod_begin + l], &t.manifest.nodes[m].lods[l]) << t.manifest.nodes[m].path << " LOD " << l;
+  }
+}
+
 // A load that cannot get its room reclaims nothing: the free entries it could have taken stay
 // as second chances. Before, it reclaimed every unprotected one and still failed.
 TEST(NodeCacheRoom, AFailedRequestReclaimsNothing) {
@@ -281,10 +323,10 @@ TEST(NodeCacheRoom, AFailedRequestReclaimsNothing) {
   const std::uint32_t old_slot = layout->nodes[1].lod_begin, recent[2] = {layout->nodes[2].lod_begin,
                                                                           layout->nodes[3].lod_begin};
   cache.request(old_slot);
-  ASSERT_TRUE(cache.install(old_slot, mesh, 1));
+  cache.install(old_slot, mesh, 1);
   for (const std::uint32_t slot : recent) {
     cache.request(slot);
-    ASSERT_TRUE(cache.install(slot, mesh, 5));
+    cache.install(slot, mesh, 5);
   }
   EXPECT_FALSE(cache.make_room(2 * bytes, 3));  // only the frame-1 entry may go: not enough
   EXPECT_TRUE(cache.resident(old_slot));
@@ -331,6 +373,62 @@ TEST(Paging, BudgetForTheWholeCutShowsFallbacksButNeverExceedsIt) {
   const FrameResult& last = fx.streaming->update(camera);
   EXPECT_LE(last.stats.wanted_bytes, options.max_resident_bytes);
   EXPECT_EQ(last.stats.holes, 0u);
+}
+
+// The cut fits the budget (max_cut_fraction 1: 64 leaves · 1560 bytes = the whole budget) but
+// not next to the pinned root drawn in its place while it loads: some of its loads find no room
+// every frame, and the frame says so. With room to spare none is turned away.
+TEST(Paging, LoadsTheBudgetHasNoRoomForAreCounted) {
+  const Camera camera = front(100.0f);  // wants every leaf's LOD 0
+  StreamingOptions tight;
+  tight.max_resident_bytes = 64 * testing::decoded_bytes(SyntheticTree::kFineTriangles);
+  tight.max_cut_fraction = 1.0;
+  Fixture fx(3, tight);
+  std::uint32_t over_budget = 0;
+  for (int i = 0; i < 30; ++i) {
+    const FrameResult& frame = fx.streaming->update(camera);
+    EXPECT_EQ(frame.stats.coarsening, 1.0f);
+    over_budget += frame.stats.loads_over_budget;
+    fx.executor->run_pending();
+  }
+  const FrameResult& last = fx.streaming->update(camera);
+  EXPECT_GT(over_budget, 0u);
+  EXPECT_GT(last.stats.loads_over_budget, 0u);  // for as long as the view stays
+  EXPECT_GT(last.stats.cache_misses, 0u);
+  EXPECT_LE(last.stats.resident_bytes + last.stats.reserved_bytes, tight.max_resident_bytes);
+
+  Fixture roomy(3);
+  for (int i = 0; i < 30; ++i) {
+    EXPECT_EQ(roomy.streaming->update(camera).stats.loads_over_budget, 0u) << i;
+    roomy.executor->run_pending();
+  }
+}
+
+// Pulled back from the 64 resident leaves, the camera wants the 8 depth-1 nodes, none resident
+// (no prefetch, and the leaves loaded in one go, so no parent was asked for as a fallback):
+// each is covered by its 8 leaves, 8 checks apiece. With 20 checks a frame the
+// third cover runs out, is given up, and the pinned root (the nearest resident ancestor) draws
+// in place of everything; with the default the 64 leaves stand in. Before, covers had no bound.
+TEST(Paging, CoveringByDescendantsChecksAtMostTheFramesNodes) {
+  const Camera near = front(100.0f), far = front(200.0f);  // all leaves; the depth-1 nodes' LOD 0
+  for (const std::uint32_t checks : {20u, StreamingOptions{}.max_cover_checks_per_frame}) {
+    StreamingOptions options;
+    options.prefetch = false;
+    options.max_loads_in_flight = 80;
+    options.max_cover_checks_per_frame = checks;
+    Fixture fx(3, options);
+    fx.settle_at(near);
+    const FrameResult& frame = fx.streaming->update(far);
+    ASSERT_EQ(frame.stats.cache_misses, 8u);
+    if (checks == 20u) {
+      EXPECT_EQ(draws_of(frame), (std::map<std::uint32_t, std::uint32_t>{{0, 1}}));
+    } else {
+      EXPECT_EQ(frame.stats.drawn_nodes, 64u);
+      for (const DrawItem& d : frame.draws) EXPECT_EQ(d.depth, 2u);
+    }
+    EXPECT_EQ(frame.stats.fallbacks, frame.stats.drawn_nodes);
+    expect_covering_cut(fx.tree, frame, far);
+  }
 }
 
 TEST(Paging, NothingDrawnIsEvicted) {
@@ -454,14 +552,17 @@ TEST(Paging, NeededLoadsComeBeforePrefetchesAndHigherPriorityFirst) {
 }
 
 // A valid node file that is not the one the manifest describes (LOD 1's bytes under LOD 0's
-// name: the cache budgets by the manifest's counts) fails its load like a corrupt one.
+// name, and a manifest edited to its size: the cache budgets by the manifest's counts) fails its
+// load like a corrupt one.
 TEST(Paging, ANodeFileWithOtherCountsThanTheManifestFailsItsLoad) {
-  Fixture fx(3);
-  const std::uint32_t swapped = fx.tree.node_at("7/7");
-  const NodeInfo& node = fx.tree.manifest.nodes[swapped];
-  Result<std::vector<std::byte>> coarser = fx.tree.source->read(node.lods[1].file);
+  SyntheticTree t = make_full_octree(3);
+  const std::uint32_t swapped = t.node_at("7/7");
+  NodeInfo& node = t.manifest.nodes[swapped];
+  Result<std::vector<std::byte>> coarser = t.source->read(node.lods[1].file, node.lods[1].bytes);
   ASSERT_TRUE(coarser.ok());
-  fx.tree.source->put(node.lods[0].file, coarser.value());
+  t.source->put(node.lods[0].file, coarser.value());
+  node.lods[0].bytes = node.lods[1].bytes;
+  Fixture fx(std::move(t), {});
 
   const Camera camera = front(100.0f);  // wants every leaf's LOD 0
   for (int i = 0; i < 30; ++i) {
@@ -471,7 +572,35 @@ TEST(Paging, ANodeFileWithOtherCountsThanTheManifestFailsItsLoad) {
   EXPECT_TRUE(fx.streaming->is_bad(swapped, 0));
   EXPECT_FALSE(fx.streaming->is_bad(swapped, 1));
   ASSERT_EQ(fx.log.size(), 1u);
-  EXPECT_NE(fx.log[0].find("the manifest says"), std::string::npos) << fx.log[0];
+  EXPECT_NE(fx.log[0].find("triangles and"), std::string::npos) << fx.log[0];
+}
+
+// A node file of another size than the manifest lists (here LOD 1's bytes under LOD 0's name) is
+// refused by the source before it is decoded, and the load fails like a missing file: logged
+// once with both sizes, marked bad, the node's other LOD drawn, no holes.
+TEST(Paging, ANodeFileOfAnotherSizeThanTheManifestSaysFailsItsLoad) {
+  Fixture fx(3);
+  const std::uint32_t swapped = fx.tree.node_at("7/7");
+  const NodeInfo& node = fx.tree.manifest.nodes[swapped];
+  Result<std::vector<std::byte>> coarser = fx.tree.source->read(node.lods[1].file, node.lods[1].bytes);
+  ASSERT_TRUE(coarser.ok());
+  fx.tree.source->put(node.lods[0].file, coarser.value());
+
+  const Camera camera = front(100.0f);  // wants every leaf's LOD 0
+  for (int i = 0; i < 30; ++i) {
+    const FrameResult& frame = fx.streaming->update(camera);
+    if (i > 0) expect_covering_cut(fx.tree, frame, camera);
+    fx.executor->run_pending();
+  }
+  EXPECT_TRUE(fx.streaming->is_bad(swapped, 0));
+  EXPECT_FALSE(fx.streaming->is_bad(swapped, 1));
+  ASSERT_EQ(fx.log.size(), 1u);
+  const std::string sizes = std::to_string(node.lods[1].bytes) + " bytes, the manifest says " +
+                            std::to_string(node.lods[0].bytes);
+  EXPECT_NE(fx.log[0].find(node.lods[0].file + ": " + sizes), std::string::npos) << fx.log[0];
+  const std::map<std::uint32_t, std::uint32_t> draws = draws_of(fx.streaming->update(camera));
+  ASSERT_EQ(draws.count(swapped), 1u);
+  EXPECT_EQ(draws.at(swapped), 1u);
 }
 
 TEST(Paging, CorruptNodeFileIsLoggedOnceAndAnAncestorIsDrawnForever) {
@@ -614,7 +743,7 @@ TEST(Paging, ThreadPoolLoadsConvergeToTheReferenceCut) {
 }
 
 // A camera with a NaN (lookAt with eye == target makes the view NaN), or without a field of view
-// or a viewport, is skipped: the previous frame's draws, no loads, and the next good camera
+// (a projection without vertical scale) or a viewport, is skipped: the previous frame's draws, no loads, and the next good camera
 // selects as if it had not come.
 TEST(Selection, AnUnusableCameraChangesNothing) {
   Fixture fx(3);
@@ -624,7 +753,7 @@ TEST(Selection, AnUnusableCameraChangesNothing) {
   Camera nan_eye = good;
   nan_eye.position.x = std::numeric_limits<float>::quiet_NaN();
   Camera no_fov = good;
-  no_fov.fovy_radians = 0.0f;
+  no_fov.projection[1][1] = 0.0f;
   Camera no_viewport = good;
   no_viewport.viewport_height_px = 0.0f;
   const Camera same_point = look(kCenter, kCenter);
@@ -665,9 +794,9 @@ class HookedSource final : public NodeSource {
  public:
   HookedSource(std::shared_ptr<const NodeSource> inner, std::function<void()> on_read)
       : inner_(std::move(inner)), on_read_(std::move(on_read)) {}
-  Result<std::vector<std::byte>> read(std::string_view file) const override {
+  Result<std::vector<std::byte>> read(std::string_view file, std::uint64_t expected_bytes) const override {
     on_read_();
-    return inner_->read(file);
+    return inner_->read(file, expected_bytes);
   }
 
  private:
@@ -705,9 +834,9 @@ TEST(Paging, ALoadThatThrowsFailsLikeAMissingFile) {
   struct Throwing final : NodeSource {
     std::shared_ptr<const NodeSource> inner;
     std::string broken;
-    Result<std::vector<std::byte>> read(std::string_view file) const override {
+    Result<std::vector<std::byte>> read(std::string_view file, std::uint64_t expected_bytes) const override {
       if (file == broken) throw std::runtime_error("simulated failure");
-      return inner->read(file);
+      return inner->read(file, expected_bytes);
     }
   };
   auto throwing = std::make_shared<Throwing>();
@@ -831,10 +960,62 @@ TEST(Disk, CorruptAndMissingNodeFilesOnDiskFallBackToTheirAncestor) {
 
 TEST(Disk, FileSourceReportsAMissingFileAsAnIoError) {
   const FileSource source(std::filesystem::temp_directory_path());
-  Result<std::vector<std::byte>> read = source.read("octolod_no_such_dir/lod0.bin");
+  Result<std::vector<std::byte>> read = source.read("octolod_no_such_dir/lod0.bin", 100);
   ASSERT_FALSE(read.ok());
   EXPECT_EQ(read.status().code(), ErrorCode::io);
   EXPECT_NE(read.status().message().find("lod0.bin"), std::string::npos);
+}
+
+// The size is checked by fstat before anything is allocated: a sparse 1 GiB file in place of a
+// node file fails at once, naming the file and both sizes, instead of being read whole.
+TEST(Disk, FileSourceRefusesAFileOfAnotherSizeBeforeReadingIt) {
+  const auto dir = scratch_dir("size");
+  std::filesystem::create_directories(dir);
+  std::ofstream(dir / "lod0.bin", std::ios::binary) << "x";
+  std::filesystem::resize_file(dir / "lod0.bin", 1ull << 30);
+  const FileSource source(dir);
+  Result<std::vector<std::byte>> read = source.read("lod0.bin", 1000);
+  ASSERT_FALSE(read.ok());
+  EXPECT_EQ(read.status().code(), ErrorCode::bad_input);
+  EXPECT_NE(read.status().message().find("lod0.bin: 1073741824 bytes, the manifest says 1000"), std::string::npos)
+      << read.status().message();
+  std::filesystem::resize_file(dir / "lod0.bin", 1000);
+  Result<std::vector<std::byte>> right = source.read("lod0.bin", 1000);
+  ASSERT_TRUE(right.ok()) << right.status().message();
+  EXPECT_EQ(right->size(), 1000u);
+  std::filesystem::remove_all(dir);
+}
+
+// A node file on disk padded past the size the manifest lists fails its load like a missing one:
+// logged, marked bad, an ancestor drawn, no holes.
+TEST(Disk, ANodeFileLargerThanTheManifestSaysFallsBackToItsAncestor) {
+  const SyntheticTree tree = make_full_octree(3);
+  const auto dir = scratch_dir("padded");
+  testing::write_tree(tree, dir);
+  const std::uint32_t padded = tree.node_at("7/7");
+  for (const LodInfo& lod : tree.manifest.nodes[padded].lods)
+    std::ofstream(dir / lod.file, std::ios::binary | std::ios::app) << "trailing";
+
+  auto executor = std::make_shared<SynchronousExecutor>();
+  std::vector<std::string> log;
+  StreamingOptions options;
+  options.log = [&log](std::string_view message) { log.emplace_back(message); };
+  auto opened = StreamingTree::open_directory(dir, executor, options);
+  ASSERT_TRUE(opened.ok()) << opened.status().message();
+  const Camera camera = front(100.0f);  // wants all 64 leaves
+  const FrameResult& frame = settle(*opened.value(), *executor, camera);
+  EXPECT_TRUE(opened.value()->is_bad(padded, 0));
+  EXPECT_TRUE(opened.value()->is_bad(padded, 1));
+  ASSERT_EQ(log.size(), 2u);
+  const LodInfo& fine = tree.manifest.nodes[padded].lods[0];
+  const std::string sizes = std::to_string(fine.bytes + 8) + " bytes, the manifest says " + std::to_string(fine.bytes);
+  EXPECT_TRUE(std::any_of(log.begin(), log.end(), [&](const std::string& line) {
+    return line.find(fine.file + ": " + sizes) != std::string::npos;
+  })) << log[0] << "\n" << log[1];
+  EXPECT_EQ(draws_of(frame).count(tree.node_at("7")), 1u);
+  EXPECT_EQ(frame.stats.holes, 0u);
+  expect_covering_cut(tree, frame, camera);
+  std::filesystem::remove_all(dir);
 }
 
 TEST(Disk, WalkCommandReplaysAPathAndReportsJson) {

@@ -131,7 +131,7 @@ inline void write_tree(const SyntheticTree& t, const std::filesystem::path& dir)
   ASSERT_TRUE(write_manifest(dir / std::string(kManifestFileName), t.manifest).ok());
   for (const NodeInfo& n : t.manifest.nodes) {
     for (const LodInfo& lod : n.lods) {
-      Result<std::vector<std::byte>> bytes = t.source->read(lod.file);
+      Result<std::vector<std::byte>> bytes = t.source->read(lod.file, lod.bytes);
       ASSERT_TRUE(bytes.ok());
       const std::filesystem::path file = dir / lod.file;
       std::filesystem::create_directories(file.parent_path());
@@ -150,9 +150,10 @@ inline Camera look(glm::vec3 eye, glm::vec3 target) {
                                  kViewportHeight);
 }
 
-// Screen-space error in pixels of `error` at `distance`, the runtime's formula.
-inline double sse_pixels(double error, double distance) {
-  return error * kViewportHeight / (2.0 * std::tan(kFovy / 2.0) * distance);
+// Screen-space error in pixels of `error` at `distance` for a vertical field of view `fovy`,
+// the runtime's formula.
+inline double sse_pixels(double error, double distance, double fovy = kFovy) {
+  return error * kViewportHeight / (2.0 * std::tan(fovy / 2.0) * distance);
 }
 
 inline double box_distance(const Bounds& b, glm::vec3 p) {
@@ -171,14 +172,15 @@ inline bool visible(const Frustum& f, const Bounds& b) {
 }
 
 // The cut written the obvious recursive way, from the manifest (tight bounds of the synthetic
-// tree nest, so node bounds are subtree bounds): {manifest node -> lod}.
+// tree nest, so node bounds are subtree bounds), for `camera` whose projection has the vertical
+// field of view `fovy`: {manifest node -> lod}.
 inline void reference_cut(const Manifest& m, const Camera& camera, double target, std::uint32_t node,
-                          std::map<std::uint32_t, std::uint32_t>& out) {
+                          std::map<std::uint32_t, std::uint32_t>& out, double fovy = kFovy) {
   const NodeInfo& n = m.nodes[node];
   if (!visible(extract_frustum(camera.projection * camera.view), n.bounds)) return;
   const double d = std::max(box_distance(n.bounds, camera.position), 1e-3);
   for (std::size_t l = n.lods.size(); l-- > 0;) {
-    if (sse_pixels(n.lods[l].error, d) <= target) {
+    if (sse_pixels(n.lods[l].error, d, fovy) <= target) {
       out[node] = static_cast<std::uint32_t>(l);
       return;
     }
@@ -188,7 +190,7 @@ inline void reference_cut(const Manifest& m, const Camera& camera, double target
     return;
   }
   for (std::int32_t c : n.children)
-    if (c >= 0) reference_cut(m, camera, target, static_cast<std::uint32_t>(c), out);
+    if (c >= 0) reference_cut(m, camera, target, static_cast<std::uint32_t>(c), out, fovy);
 }
 
 inline std::map<std::uint32_t, std::uint32_t> draws_of(const FrameResult& frame) {

@@ -7,6 +7,7 @@
 #include <cerrno>
 #include <cstring>
 #include <cmath>
+#include <optional>
 #include <string>
 #include <utility>
 
@@ -298,14 +299,20 @@ Result<std::uint64_t> NodeFileWriter::finish() {
   return f.written;
 }
 
-Result<std::vector<std::byte>> read_node_file_bytes(const std::filesystem::path& path) {
+namespace {
+
+// read_node_file_bytes, checking the size against `expected_bytes` when there is one.
+Result<std::vector<std::byte>> read_whole_file(const std::filesystem::path& path,
+                                               std::optional<std::uint64_t> expected_bytes) {
   // O_NONBLOCK: opening a FIFO without a writer returns at once, and fstat then refuses it
   UniqueFd fd(::open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NONBLOCK));
   if (!fd.valid()) return io_error(path.string() + ": cannot open: " + std::strerror(errno));
   struct stat info {};
   if (::fstat(fd.get(), &info) != 0) return io_error(path.string() + ": cannot stat: " + std::strerror(errno));
   if (!S_ISREG(info.st_mode)) return io_error(path.string() + ": not a regular file");
-  std::vector<std::byte> bytes(static_cast<std::size_t>(info.st_size));
+  const auto size = static_cast<std::uint64_t>(info.st_size);
+  if (expected_bytes) OCTOLOD_RETURN_IF_ERROR(check_node_file_size(path.string(), size, *expected_bytes));
+  std::vector<std::byte> bytes(static_cast<std::size_t>(size));
   for (std::size_t done = 0; done < bytes.size();) {
     const ssize_t n = ::read(fd.get(), bytes.data() + done, bytes.size() - done);
     if (n < 0 && errno == EINTR) continue;
@@ -314,6 +321,23 @@ Result<std::vector<std::byte>> read_node_file_bytes(const std::filesystem::path&
     done += static_cast<std::size_t>(n);
   }
   return bytes;
+}
+
+}  // namespace
+
+Result<std::vector<std::byte>> read_node_file_bytes(const std::filesystem::path& path) {
+  return read_whole_file(path, std::nullopt);
+}
+
+Result<std::vector<std::byte>> read_node_file_bytes(const std::filesystem::path& path,
+                                                    std::uint64_t expected_bytes) {
+  return read_whole_file(path, expected_bytes);
+}
+
+Status check_node_file_size(std::string_view name, std::uint64_t actual_bytes, std::uint64_t expected_bytes) {
+  if (actual_bytes == expected_bytes) return {};
+  return bad_input_error(std::string(name) + ": " + std::to_string(actual_bytes) + " bytes, the manifest says " +
+                         std::to_string(expected_bytes) + " (a node file from elsewhere, or an edited manifest)");
 }
 
 Result<NodeMesh> read_node_file(const std::filesystem::path& path) {

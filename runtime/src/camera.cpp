@@ -5,7 +5,6 @@
 
 #include <cmath>
 
-#include <glm/gtc/constants.hpp>
 #include <glm/gtc/matrix_transform.hpp>
 
 namespace octolod::runtime {
@@ -18,7 +17,6 @@ Camera make_perspective_camera(glm::vec3 eye, glm::vec3 target, glm::vec3 up, fl
   camera.projection = glm::perspective(fovy_radians, aspect, near_distance, far_distance);
   camera.position = eye;
   camera.viewport_height_px = viewport_height_px;
-  camera.fovy_radians = fovy_radians;
   return camera;
 }
 
@@ -26,8 +24,7 @@ bool is_usable(const Camera& camera) {
   const auto finite = [](const auto& v) { return !glm::any(glm::isnan(v)) && !glm::any(glm::isinf(v)); };
   for (int i = 0; i < 4; ++i)
     if (!finite(camera.view[i]) || !finite(camera.projection[i])) return false;
-  return finite(camera.position) && camera.fovy_radians > 0.0f &&
-         camera.fovy_radians < glm::pi<float>() && camera.viewport_height_px > 0.0f &&
+  return finite(camera.position) && camera.projection[1][1] != 0.0f && camera.viewport_height_px > 0.0f &&
          std::isfinite(camera.viewport_height_px);
 }
 

@@ -85,7 +85,7 @@ LoadCompletion LoadQueue::load(std::uint32_t slot) const {
 
 void LoadQueue::read_and_decode(const LodInfo& lod, LoadCompletion& done) const {
   const std::string& file = lod.file;
-  Result<std::vector<std::byte>> bytes = source_->read(file);
+  Result<std::vector<std::byte>> bytes = source_->read(file, lod.bytes);
   if (!bytes.ok()) {
     done.status = bytes.status();
     return;

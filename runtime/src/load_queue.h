@@ -1,9 +1,10 @@
 // The hand-off between the render thread and the loader tasks (El-Sana & Chiang 2000: I/O runs
 // separately from rendering). The render thread publishes a prioritized list of slots to load;
-// loader tasks posted to the Executor pop the most important one, read it through the NodeSource,
-// decode and checksum it (decode_node_file), and push the result onto a completed list that the
-// render thread drains at the start of its next frame. Both lists sit behind one mutex; the
-// render thread never waits for a load, only for that mutex.
+// loader tasks posted to the Executor pop the most important one, read it through the NodeSource
+// (which refuses a file of another size than the manifest lists), decode and checksum it
+// (decode_node_file), and push the result onto a completed list that the render thread drains at
+// the start of its next frame. Both lists sit behind one mutex; the render thread never waits for
+// a load, only for that mutex.
 //
 // Tasks share ownership of the queue, so a StreamingTree may be destroyed while tasks are still
 // posted; shutdown() makes them finish without loading.

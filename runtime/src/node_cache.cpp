@@ -33,10 +33,10 @@ void NodeCache::mark_bad(std::uint32_t slot) {
   slots_[slot].state = SlotState::bad;
 }
 
-bool NodeCache::install(std::uint32_t slot, std::shared_ptr<const NodeMesh> mesh, std::uint32_t frame) {
+void NodeCache::install(std::uint32_t slot, std::shared_ptr<const NodeMesh> mesh, std::uint32_t frame) {
   cancel(slot);
   const std::uint64_t bytes = mesh_bytes(*mesh);
-  if (!make_room(bytes, kNoSlot)) return false;
+  assert(bytes <= tree_.slot_bytes[slot] && "install() of a mesh larger than its reservation: check_node_lod it first");
   Slot& s = slots_[slot];
   s.mesh = std::move(mesh);
   s.bytes = bytes;
@@ -49,7 +49,6 @@ bool NodeCache::install(std::uint32_t slot, std::shared_ptr<const NodeMesh> mesh
   short_from_ = kNoSlot;
   link_tail(slot);
   count_resident(slot, +1);
-  return true;
 }
 
 void NodeCache::use(std::uint32_t slot, std::uint32_t frame) {

@@ -47,9 +47,10 @@ class NodeCache {
   void request(std::uint32_t slot);
   void cancel(std::uint32_t slot);
   void mark_bad(std::uint32_t slot);  // from requested
-  // requested -> resident (on the free list, most recent) with the mesh's real size; false, and
-  // the slot absent again, when even reclaiming every free entry leaves no room.
-  bool install(std::uint32_t slot, std::shared_ptr<const NodeMesh> mesh, std::uint32_t frame);
+  // requested -> resident (on the free list, most recent). The mesh takes over the request's
+  // reservation, which it must fit (mesh_bytes at most the slot's expected bytes: a loaded mesh
+  // has the manifest's counts, check_node_lod), so installing never needs room or evicts.
+  void install(std::uint32_t slot, std::shared_ptr<const NodeMesh> mesh, std::uint32_t frame);
 
   // Frame bookkeeping: use() takes a resident slot off the free list (drawn in `frame`);
   // release() puts an in-use slot at the free list's tail, keeping the frame it was last used in;

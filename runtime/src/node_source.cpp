@@ -5,8 +5,8 @@
 
 namespace octolod::runtime {
 
-Result<std::vector<std::byte>> FileSource::read(std::string_view file) const {
-  return read_node_file_bytes(root_ / std::filesystem::path(file));
+Result<std::vector<std::byte>> FileSource::read(std::string_view file, std::uint64_t expected_bytes) const {
+  return read_node_file_bytes(root_ / std::filesystem::path(file), expected_bytes);
 }
 
 void MemorySource::put(std::string file, std::vector<std::byte> bytes) {
@@ -14,7 +14,7 @@ void MemorySource::put(std::string file, std::vector<std::byte> bytes) {
   files_[std::move(file)] = std::move(bytes);
 }
 
-Result<std::vector<std::byte>> MemorySource::read(std::string_view file) const {
+Result<std::vector<std::byte>> MemorySource::read(std::string_view file, std::uint64_t expected_bytes) const {
   std::lock_guard lock(mutex_);
   ++total_reads_;
   auto count = reads_.find(file);
@@ -22,6 +22,7 @@ Result<std::vector<std::byte>> MemorySource::read(std::string_view file) const {
   ++count->second;
   auto it = files_.find(file);
   if (it == files_.end()) return io_error(std::string(file) + ": no such file in memory source");
+  OCTOLOD_RETURN_IF_ERROR(check_node_file_size(file, it->second.size(), expected_bytes));
   return it->second;
 }
 

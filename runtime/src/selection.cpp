@@ -2,7 +2,8 @@
 // masks (a box entirely inside a plane's half-space passes that plane for its whole subtree,
 // since subtree boxes nest); the error rule is docs/design.md's
 //   error · viewport_h / (2·tan(fovy/2) · distance) <= target_sse_pixels
-// rewritten as error <= distance · error_per_distance, so no division per LOD.
+// with 1/tan(fovy/2) read from the projection (|projection[1][1]|), rewritten as
+// error <= distance · error_per_distance, so no division per LOD.
 #include "selection.h"
 
 #include <algorithm>
@@ -15,8 +16,7 @@ SelectionView make_selection_view(const Camera& camera, const StreamingOptions& 
   SelectionView v;
   v.frustum = extract_frustum(camera.projection * camera.view);
   v.eye = camera.position;
-  const float tan_half = std::tan(0.5f * camera.fovy_radians);
-  v.pixels_per_unit = camera.viewport_height_px / (2.0f * std::max(tan_half, 1e-6f));
+  v.pixels_per_unit = 0.5f * camera.viewport_height_px * std::abs(camera.projection[1][1]);
   v.error_per_distance = static_cast<float>(options.target_sse_pixels) / v.pixels_per_unit;
   v.mode = options.mode;
   v.distance_thresholds = &options.distance_thresholds;

@@ -17,7 +17,8 @@ namespace octolod::runtime {
 struct SelectionView {
   Frustum frustum;
   glm::vec3 eye{0.0f};               // model space
-  float pixels_per_unit = 1.0f;      // viewport_h / (2·tan(fovy/2)): SSE = error·this / distance
+  // viewport_h · |projection[1][1]| / 2 = viewport_h / (2·tan(fovy/2)): SSE = error·this / distance
+  float pixels_per_unit = 1.0f;
   float error_per_distance = 0.0f;   // target_sse / pixels_per_unit: error allowed per unit distance
   SelectionMode mode = SelectionMode::screen_space_error;
   const std::vector<double>* distance_thresholds = nullptr;  // distance mode only

@@ -75,7 +75,7 @@ struct StreamingTree::Impl {
        std::shared_ptr<Executor> exec, StreamingOptions o)
       : manifest(std::move(m)), options(std::move(o)), tree(std::move(t)),
         cache(tree, options.max_resident_bytes),
-        loads(std::make_shared<LoadQueue>(std::move(source), manifest, std::move(tree.slot_lod),
+        loads(std::make_shared<LoadQueue>(std::move(source), manifest, slot_lods(*manifest, tree),
                                           manifest->layout)),
         executor(std::move(exec)),
         root_slot(tree.nodes[0].lod_count > 0 ? tree.slot_end(0) - 1 : kNoSlot),
@@ -104,7 +104,8 @@ struct StreamingTree::Impl {
   std::uint32_t consider_neighbours(const WantedLod& wanted);
   void consider_prefetch(std::uint32_t slot, float priority);
   void issue_loads(const SelectionView& view, const Camera& camera, FrameStats& stats);
-  bool issue(std::uint32_t slot, std::uint32_t protect_from_frame, FrameStats& stats);
+  enum class Issued { queued, skipped, no_room };
+  Issued issue(std::uint32_t slot, std::uint32_t protect_from_frame, FrameStats& stats);
   void log_failure(std::uint32_t slot, const Status& status) const;
 
   std::uint32_t coarsest_resident(std::uint32_t node) const {
@@ -132,6 +133,7 @@ struct StreamingTree::Impl {
   const std::uint32_t root_slot;  // the root's coarsest LOD: requested first, pinned
   std::uint32_t frame = 0;
   std::uint32_t requested = 0;  // slots queued or loading
+  std::uint32_t cover_checks_left = 0;  // this frame's, see StreamingOptions::max_cover_checks_per_frame
   float coarsening = 1.0f;  // last frame's, the starting point of the next
   bool has_previous_eye = false;
   glm::vec3 previous_eye{0.0f};
@@ -254,7 +256,8 @@ SelectionCounters StreamingTree::Impl::select_within_budget(SelectionView& view)
   return counters;
 }
 
-// Loads that finished since the last frame become resident (on the free list until drawn).
+// Loads that finished since the last frame become resident (on the free list until drawn), in
+// the room their requests reserved.
 void StreamingTree::Impl::install_completions(FrameStats& stats) {
   loads->take_completed(completions);
   for (LoadCompletion& done : completions) {
@@ -265,10 +268,7 @@ void StreamingTree::Impl::install_completions(FrameStats& stats) {
       log_failure(done.slot, done.status);
       continue;
     }
-    if (!cache.install(done.slot, std::move(done.mesh), frame)) {
-      ++stats.loads_discarded;
-      continue;
-    }
+    cache.install(done.slot, std::move(done.mesh), frame);
     ++stats.loads_completed;
     if (done.slot == root_slot) cache.pin(done.slot);
   }
@@ -290,6 +290,7 @@ void StreamingTree::Impl::log_failure(std::uint32_t slot, const Status& status) 
 // then replaces everything drawn below it. Missing LODs become load candidates.
 void StreamingTree::Impl::resolve(const SelectionView& view, FrameStats& stats) {
   draws.clear();
+  cover_checks_left = options.max_cover_checks_per_frame;
   std::uint32_t covered_end = 0;  // preorder nodes below this index are drawn by an ancestor
   for (const WantedLod& w : cut) {
     const bool resident = cache.resident(w.slot);
@@ -344,12 +345,19 @@ bool StreamingTree::Impl::substitute_same_node(const WantedLod& wanted) {
 }
 
 // Draws every visible child by its coarsest resident LOD, or recursively by its own children;
-// all or nothing. Subtrees without any resident LOD fail at once.
+// all or nothing. Subtrees without any resident LOD fail at once, and so does the whole cover
+// when the frame's checks (one per child looked at) run out, so that a frame's covers check at
+// most max_cover_checks_per_frame nodes.
 bool StreamingTree::Impl::cover_with_descendants(std::uint32_t node, const Frustum& frustum) {
   const LayoutNode& n = tree.nodes[node];
   if (n.child_count == 0 || cache.subtree_resident(node) == 0) return false;
   const std::size_t mark = draws.size();
   for (std::uint32_t i = 0; i < n.child_count; ++i) {
+    if (cover_checks_left == 0) {
+      draws.resize(mark);
+      return false;
+    }
+    --cover_checks_left;
     const std::uint32_t child = tree.children[n.child_begin + i];
     const LayoutNode& c = tree.nodes[child];
     if (classify_box(frustum, c.center, c.half) == Containment::outside) continue;
@@ -525,7 +533,7 @@ void StreamingTree::Impl::issue_loads(const SelectionView& view, const Camera& c
   // Needed loads may reclaim any free entry not wanted in this frame.
   for (const Candidate& c : needed) {
     if (requested >= options.max_loads_in_flight) break;
-    issue(c.slot, frame, stats);
+    if (issue(c.slot, frame, stats) == Issued::no_room) ++stats.loads_over_budget;
   }
   prefetch.clear();
   if (options.prefetch && requested < options.max_loads_in_flight) {
@@ -550,17 +558,20 @@ void StreamingTree::Impl::issue_loads(const SelectionView& view, const Camera& c
   for (std::uint32_t i = 0; i < tasks; ++i) executor->post([queue = loads] { queue->run_task(); });
 }
 
-bool StreamingTree::Impl::issue(std::uint32_t slot, std::uint32_t protect_from_frame,
-                                FrameStats& stats) {
-  if (requested >= options.max_loads_in_flight) return false;
-  if (cache.state(slot) != SlotState::absent) return false;
-  if (!cache.make_room(tree.slot_bytes[slot], protect_from_frame)) return false;
+// Queues a load of `slot` if it is absent and a load is free (else skipped), reserving its
+// expected bytes; no_room when the budget cannot take them even by reclaiming the free entries
+// used before `protect_from_frame`.
+StreamingTree::Impl::Issued StreamingTree::Impl::issue(std::uint32_t slot, std::uint32_t protect_from_frame,
+                                                       FrameStats& stats) {
+  if (requested >= options.max_loads_in_flight) return Issued::skipped;
+  if (cache.state(slot) != SlotState::absent) return Issued::skipped;
+  if (!cache.make_room(tree.slot_bytes[slot], protect_from_frame)) return Issued::no_room;
   cache.request(slot);
   ++requested;
   new_pending.push_back(slot);
   if (pending_mark[slot] == frame) pending_mark[slot] = 0;  // taken back and queued again
   else ++stats.loads_issued;
-  return true;
+  return Issued::queued;
 }
 
 // --- StreamingTree ------------------------------------------------------------------------------

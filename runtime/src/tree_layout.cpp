@@ -87,7 +87,6 @@ Result<TreeLayout> build_tree_layout(const Manifest& manifest) {
       t.slot_bytes.push_back(decoded_bytes(lod, manifest.layout));
       t.slot_triangles.push_back(lod.triangles);
       t.slot_node.push_back(static_cast<std::uint32_t>(i));
-      t.slot_lod.push_back(&lod);
     }
   }
   t.child_coarsest_slot.reserve(t.children.size());
@@ -95,6 +94,13 @@ Result<TreeLayout> build_tree_layout(const Manifest& manifest) {
     t.child_coarsest_slot.push_back(t.nodes[child].lod_count > 0 ? t.slot_end(child) - 1 : kNoSlot);
   t.min_distance = std::max(2e-6f * glm::length(t.nodes[0].half), 1e-12f);
   return t;
+}
+
+std::vector<const LodInfo*> slot_lods(const Manifest& manifest, const TreeLayout& layout) {
+  std::vector<const LodInfo*> lods(layout.slot_node.size());
+  for (const LayoutNode& n : layout.nodes)
+    for (std::uint32_t l = 0; l < n.lod_count; ++l) lods[n.lod_begin + l] = &manifest.nodes[n.manifest_index].lods[l];
+  return lods;
 }
 
 }  // namespace octolod::runtime

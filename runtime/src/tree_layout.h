@@ -46,10 +46,6 @@ struct TreeLayout {
   std::vector<std::uint64_t> slot_bytes;     // expected decoded NodeMesh bytes
   std::vector<std::uint32_t> slot_triangles;
   std::vector<std::uint32_t> slot_node;      // internal node index
-  // The manifest's LodInfo (its file relative to the tree root, its counts), not copied (a
-  // 100M-triangle tree has 282K of them), so the Manifest the layout was built from must outlive
-  // their use.
-  std::vector<const LodInfo*> slot_lod;
   std::vector<std::uint32_t> manifest_to_internal;
   float min_distance = 1e-6f;  // distances are clamped to this (model units)
 
@@ -60,5 +56,11 @@ struct TreeLayout {
 
 // Fails with bad_input when the manifest has no nodes or no geometry at all.
 Result<TreeLayout> build_tree_layout(const Manifest& manifest);
+
+// For the loaders, which the layout does not outlive: per slot of `layout` (built from
+// `manifest`), the manifest's LodInfo (its file relative to the tree root, its counts and size).
+// Pointers, not copies (a 100M-triangle tree has 282K of them): valid while `manifest` lives
+// unchanged.
+std::vector<const LodInfo*> slot_lods(const Manifest& manifest, const TreeLayout& layout);
 
 }  // namespace octolod::runtime

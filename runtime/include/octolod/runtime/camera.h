@@ -10,16 +10,20 @@
 namespace octolod::runtime {
 
 struct Camera {
-  glm::mat4 view{1.0f};        // model space -> eye space
-  glm::mat4 projection{1.0f};  // eye space -> clip space, OpenGL convention (glm::perspective)
+  glm::mat4 view{1.0f};  // model space -> eye space
+  // Eye space -> clip space, a perspective projection in OpenGL convention (glm::perspective; a
+  // [0, 1] depth range, an infinite far plane or a y flip for a y-down clip space work too).
+  // Besides culling, its vertical scale |projection[1][1]| (1/tan(fovy/2), off-centre projections
+  // included) sets how many pixels a model unit covers at unit distance: the field of view of the
+  // screen-space error is the projection's.
+  glm::mat4 projection{1.0f};
   glm::vec3 position{0.0f};    // eye position in model space (model units)
   float viewport_height_px = 1080.0f;  // height of the render target in pixels
-  float fovy_radians = 1.0f;           // vertical field of view of `projection`
 };
 
-// Whether update() can select for `camera`: every number finite, 0 < fovy_radians < pi and a
-// positive viewport height. A NaN eye (lookAt with eye == target gives a NaN view) would refine
-// every node to its leaves and cull nothing.
+// Whether update() can select for `camera`: every number finite, a projection with a vertical
+// scale (projection[1][1] != 0) and a positive viewport height. A NaN eye (lookAt with eye ==
+// target gives a NaN view) would refine every node to its leaves and cull nothing.
 bool is_usable(const Camera& camera);
 
 // A symmetric perspective camera at `eye` looking at `target` (model space), with near/far

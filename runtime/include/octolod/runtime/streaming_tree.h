@@ -49,7 +49,7 @@ namespace octolod::runtime {
 
 enum class SelectionMode {
   // Coarsest LOD whose screen-space error error·viewport_h / (2·tan(fovy/2)·distance) is at most
-  // target_sse_pixels.
+  // target_sse_pixels, with 1/tan(fovy/2) the projection's |projection[1][1]| (camera.h).
   screen_space_error,
   // The seed's pure distance rule (seed 4.5), see StreamingOptions::distance_thresholds.
   distance,
@@ -96,6 +96,15 @@ struct StreamingOptions {
   // also caps the loads started per frame. More hides latency and raises throughput; fewer keeps
   // the queue closer to the current view (more of it can be cancelled).
   std::uint32_t max_loads_in_flight = 32;
+  // A wanted LOD that is not resident may be drawn by resident descendants instead (ones that
+  // cover all of its visible part, or none), found by checking the nodes below it. This caps the
+  // nodes so checked per update(): without it a camera pulled back from a detailed view (every
+  // wanted LOD missing, the fine cut below them resident) walked the whole resident part of the
+  // tree in one frame. A cover that would need more checks is given up and the nearest resident
+  // ancestor draws there instead (coarser) until the wanted LOD arrives. Larger keeps more
+  // detail on screen while such a cut loads and costs more per frame (a check is about as cheap
+  // as a node visited by the selection); 0: descendants never stand in.
+  std::uint32_t max_cover_checks_per_frame = 4096;
   // Called once per node LOD that failed to load (missing file, checksum failure, wrong layout),
   // from the thread that calls update(). Null: silent.
   std::function<void(std::string_view message)> log;
@@ -126,7 +135,11 @@ struct FrameStats {
   std::uint32_t loads_completed = 0;   // loads installed this frame
   std::uint32_t loads_failed = 0;      // loads that failed this frame (node LOD marked bad)
   std::uint32_t loads_cancelled = 0;   // queued loads dropped before they started: no longer wanted
-  std::uint32_t loads_discarded = 0;   // completed loads that no longer fit the budget
+  // Needed loads not queued this frame because the budget had no room for them next to what
+  // the frame draws, what it wants and the loads in flight (they are tried again next frame).
+  // Above 0 frame after frame: max_resident_bytes is too small for this view at this
+  // max_cut_fraction (the cut fits, but not next to the fallbacks drawn while it loads).
+  std::uint32_t loads_over_budget = 0;
   std::uint32_t loads_in_flight = 0;   // queued or running after this frame
   std::uint32_t cache_hits = 0;        // wanted LODs that were resident
   std::uint32_t second_chance_hits = 0;  // of those, reclaimed from the free list without I/O
