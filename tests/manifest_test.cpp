@@ -103,6 +103,19 @@ TEST(Manifest, RejectsFilesEscapingTheTree) {
   }
 }
 
+// A LOD's byte count is what its file must hold (the runtime reads exactly that many): one
+// below a node file's header cannot be any node file.
+TEST(Manifest, RejectsALodSmallerThanANodeFileHeader) {
+  Manifest m = small_manifest();
+  m.nodes[2].lods[0].bytes = kNodeFileHeaderBytes - 1;
+  Result<Manifest> r = manifest_from_json(manifest_to_json(m), "m.json");
+  ASSERT_FALSE(r.ok());
+  EXPECT_NE(r.status().message().find("lod 0: 55 bytes, less than a node file's header (56)"), std::string::npos)
+      << r.status().message();
+  m.nodes[2].lods[0].bytes = kNodeFileHeaderBytes;
+  EXPECT_TRUE(manifest_from_json(manifest_to_json(m), "m.json").ok());
+}
+
 TEST(Manifest, RejectsMissingKeysWrongTypesAndGarbage) {
   EXPECT_FALSE(manifest_from_json("{", "a").ok());
   EXPECT_FALSE(manifest_from_json("{\"format\":\"octolod-manifest\"}", "b").ok());

@@ -451,7 +451,7 @@ class LodTreeBuilder::Impl {
   // Child c's LOD `index` in c.mesh: its kept LOD 0 (left in place), else read from its file.
   Status load_chosen(ChildLod& c, std::size_t index) const {
     if (c.in_memory && index == 0) return {};
-    auto read = read_node_file(options_.root / c.lods[index].file);
+    auto read = read_node_file(options_.root / c.lods[index].file, c.lods[index].bytes);
     if (!read.ok()) return read.status();
     c.mesh = std::move(read).value();
     return {};

@@ -53,7 +53,7 @@ Result<std::vector<NodeMesh>> load_cut(const std::filesystem::path& root, const 
   for (const CutEntry& e : cut) {
     const LodInfo& lod = manifest.nodes[e.node].lods[e.lod];
     const std::filesystem::path file = root / lod.file;
-    Result<NodeMesh> mesh = read_node_file(file);
+    Result<NodeMesh> mesh = read_node_file(file, lod.bytes);
     if (!mesh.ok()) return mesh.status();
     OCTOLOD_RETURN_IF_ERROR(check_node_lod(mesh.value(), lod, manifest.layout, file.string()));
     meshes.push_back(std::move(mesh).value());

@@ -108,6 +108,9 @@ Status validate_manifest(const Manifest& m, std::string_view name) {
       if (!safe_relative(lod.file))
         return invalid(name, where + " lod " + std::to_string(l) + ": file must be a relative path without '..'");
       if (!(lod.error >= 0.0)) return invalid(name, where + " lod " + std::to_string(l) + ": negative or NaN error");
+      if (lod.bytes < kNodeFileHeaderBytes)
+        return invalid(name, where + " lod " + std::to_string(l) + ": " + std::to_string(lod.bytes) +
+                                 " bytes, less than a node file's header (" + std::to_string(kNodeFileHeaderBytes) + ")");
     }
   }
   return {};

@@ -346,4 +346,10 @@ Result<NodeMesh> read_node_file(const std::filesystem::path& path) {
   return decode_node_file(bytes.value(), path.string());
 }
 
+Result<NodeMesh> read_node_file(const std::filesystem::path& path, std::uint64_t expected_bytes) {
+  Result<std::vector<std::byte>> bytes = read_node_file_bytes(path, expected_bytes);
+  if (!bytes.ok()) return bytes.status();
+  return decode_node_file(bytes.value(), path.string());
+}
+
 }  // namespace octolod

@@ -87,7 +87,8 @@ std::string manifest_to_json(const Manifest& manifest);
 std::string bake_parameters_to_json(const BakeParameters& parameters);
 // bad_input naming `name` unless `manifest` is a tree: nodes (at least the root) whose parents
 // precede them, parent/child links consistent and in range, depths one below the parent's, LOD
-// files relative and without "..", errors not negative or NaN. Every reader below checks it; a
+// files relative and without "..", errors not negative or NaN, at least a node file header's
+// bytes (kNodeFileHeaderBytes). Every reader below checks it; a
 // manifest built in code is checked by StreamingTree::open.
 Status validate_manifest(const Manifest& manifest, std::string_view name);
 // Parses and validates (validate_manifest).

@@ -64,6 +64,8 @@ Result<std::vector<std::byte>> read_node_file_bytes(const std::filesystem::path&
 Status check_node_file_size(std::string_view name, std::uint64_t actual_bytes, std::uint64_t expected_bytes);
 // decode_node_file of read_node_file_bytes(path).
 Result<NodeMesh> read_node_file(const std::filesystem::path& path);
+// decode_node_file of read_node_file_bytes(path, expected_bytes): a manifest's node LOD.
+Result<NodeMesh> read_node_file(const std::filesystem::path& path, std::uint64_t expected_bytes);
 
 // Writes a node file piece by piece, for a mesh too large to hold at once (a streamed octree
 // leaf): the counts and bounds up front, then every vertex, then every index, in order. The
