@@ -16,6 +16,7 @@
 #include <functional>
 #include <future>
 #include <limits>
+#include <sstream>
 #include <stdexcept>
 #include <cstdlib>
 #include <filesystem>
@@ -1044,9 +1045,21 @@ TEST(Disk, WalkCommandReplaysAPathAndReportsJson) {
     EXPECT_TRUE(doc.contains(key)) << key;
   std::ifstream rows(csv);
   std::string line;
-  int lines = 0;
-  while (std::getline(rows, line)) ++lines;
+  std::getline(rows, line);
+  const auto columns = [](const std::string& row) {
+    std::vector<std::string> cells;
+    std::stringstream cells_in(row);
+    for (std::string cell; std::getline(cells_in, cell, ',');) cells.push_back(cell);
+    return cells;
+  };
+  const std::vector<std::string> header = columns(line);
+  const auto over_budget = std::find(header.begin(), header.end(), "loads_over_budget");
+  ASSERT_NE(over_budget, header.end()) << line;
+  int lines = 1, over_budget_rows = 0;
+  for (; std::getline(rows, line); ++lines)
+    over_budget_rows += std::stoi(columns(line).at(static_cast<std::size_t>(over_budget - header.begin()))) > 0;
   EXPECT_EQ(lines, 121);  // header + one row per frame
+  EXPECT_EQ(doc.at("frames_over_budget"), over_budget_rows);
   std::filesystem::remove_all(dir);
 }
 

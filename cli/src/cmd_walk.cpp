@@ -136,6 +136,7 @@ void write_csv_row(std::ostream& csv, std::uint32_t frame, const runtime::FrameS
   csv << frame << ',' << s.visited << ',' << s.culled << ',' << s.wanted << ',' << s.drawn_nodes << ','
       << s.drawn_triangles << ',' << s.resident_bytes << ',' << s.reserved_bytes << ','
       << s.loads_issued << ',' << s.loads_completed << ',' << s.loads_cancelled << ',' << s.loads_failed
+      << ',' << s.loads_over_budget
       << ',' << s.cache_hits << ',' << s.cache_misses << ',' << s.second_chance_hits << ','
       << s.fallbacks << ',' << s.holes << ',' << s.coarsening << ',' << s.selection_ms << ','
       << s.selection_cpu_ms << '\n';
@@ -202,7 +203,7 @@ int run_walk(const WalkArgs& args, const CommandContext& context) {
   if (!args.csv.empty()) {  // whole or not at all, after the replay
     std::ostringstream csv;
     csv << "frame,visited,culled,wanted,drawn_nodes,drawn_triangles,resident_bytes,reserved_bytes,"
-           "loads_issued,loads_completed,loads_cancelled,loads_failed,cache_hits,cache_misses,"
+           "loads_issued,loads_completed,loads_cancelled,loads_failed,loads_over_budget,cache_hits,cache_misses,"
            "second_chance_hits,fallbacks,holes,coarsening,selection_ms,selection_cpu_ms\n";
     for (std::uint32_t i = 0; i < stats.size(); ++i) write_csv_row(csv, i, stats[i]);
     const std::string text = std::move(csv).str();
@@ -216,7 +217,7 @@ int run_walk(const WalkArgs& args, const CommandContext& context) {
   std::uint64_t max_resident = 0, hits = 0, misses = 0, second_chance = 0, issued = 0, loads = 0,
                 cancelled = 0, failed = 0;
   double resident_sum = 0, triangles_sum = 0, max_coarsening = 1;
-  std::uint32_t waiting_frames = 0, fallback_frames = 0, hole_frames = 0;
+  std::uint32_t waiting_frames = 0, fallback_frames = 0, hole_frames = 0, over_budget_frames = 0;
   std::vector<double> ms, cpu_ms;
   for (const runtime::FrameStats& s : stats) {
     max_resident = std::max(max_resident, s.resident_bytes);
@@ -232,6 +233,7 @@ int run_walk(const WalkArgs& args, const CommandContext& context) {
     waiting_frames += s.waiting_on_io > 0 ? 1u : 0u;
     fallback_frames += (s.fallbacks > 0 || s.holes > 0) ? 1u : 0u;
     hole_frames += s.holes > 0 ? 1u : 0u;
+    over_budget_frames += s.loads_over_budget > 0 ? 1u : 0u;
     max_coarsening = std::max(max_coarsening, static_cast<double>(s.coarsening));
     ms.push_back(s.selection_ms);
     cpu_ms.push_back(s.selection_cpu_ms);
@@ -253,6 +255,7 @@ int run_walk(const WalkArgs& args, const CommandContext& context) {
                      {"frames_waiting_on_io", waiting_frames},
                      {"fallback_frames", fallback_frames},
                      {"hole_frames", hole_frames},
+                     {"frames_over_budget", over_budget_frames},
                      {"loads", loads},
                      {"loads_issued", issued},
                      {"loads_cancelled", cancelled},
@@ -303,8 +306,9 @@ int run_walk(const WalkArgs& args, const CommandContext& context) {
                 static_cast<unsigned long long>(loads), static_cast<unsigned long long>(cancelled),
                 static_cast<unsigned long long>(failed), static_cast<unsigned long long>(hits),
                 static_cast<unsigned long long>(misses), hit_rate, static_cast<unsigned long long>(second_chance));
-    std::printf("  frames waiting on I/O %u, frames with fallbacks %u (with holes %u)\n", waiting_frames,
-                fallback_frames, hole_frames);
+    std::printf("  frames waiting on I/O %u, frames with fallbacks %u (with holes %u), frames with loads the "
+                "budget had no room for %u\n",
+                waiting_frames, fallback_frames, hole_frames, over_budget_frames);
     std::printf("  selection ms: p50 %.4f, p99 %.4f, max %.4f (thread CPU: p50 %.4f, p99 %.4f, max %.4f)\n",
                 percentile(ms, 0.5), percentile(ms, 0.99), ms.empty() ? 0.0 : *std::max_element(ms.begin(), ms.end()),
                 percentile(cpu_ms, 0.5), percentile(cpu_ms, 0.99),
