@@ -166,6 +166,28 @@ TEST(Selection, TheFieldOfViewComesFromTheProjection) {
   EXPECT_EQ(draws_of(fx.settle_at(flipped)), expected);
 }
 
+// An orthographic view (glm::ortho) draws a node as large at every distance, so its cut does not
+// coarsen as the camera backs away: the same reference cut from 200 and from 2,000 units, finer
+// than a perspective camera's at 2,000. Before, the error was divided by the distance as for a
+// perspective, and the far orthographic view drew the root's coarsest LOD.
+TEST(Selection, AnOrthographicViewRefinesTheSameAtEveryDistance) {
+  Fixture fx(4);
+  constexpr float kHeight = 300.0f;  // model units the view spans vertically
+  auto ortho = [&](float distance) {
+    Camera camera = look(kCenter + glm::vec3(0, 0, distance), kCenter);
+    camera.projection = glm::ortho(-kHeight / 2, kHeight / 2, -kHeight / 2, kHeight / 2, 0.01f, 10000.0f);
+    return camera;
+  };
+  EXPECT_TRUE(is_orthographic(ortho(200.0f).projection));
+  EXPECT_FALSE(is_orthographic(look(kCenter + glm::vec3(0, 0, 200.0f), kCenter).projection));
+  std::map<std::uint32_t, std::uint32_t> expected;
+  testing::reference_cut(fx.tree.manifest, ortho(200.0f), 2.0, 0, expected, testing::kFovy, kHeight);
+  ASSERT_GT(expected.size(), 1u);  // refined below the root
+  EXPECT_EQ(draws_of(fx.settle_at(ortho(200.0f))), expected);
+  EXPECT_EQ(draws_of(fx.settle_at(ortho(2000.0f))), expected);
+  EXPECT_NE(draws_of(fx.settle_at(look(kCenter + glm::vec3(0, 0, 2000.0f), kCenter))), expected);
+}
+
 TEST(Selection, LargeNodeStraddlingTheFrustumIsKept) {
   Fixture fx(3);
   // Inside the root box near its centre: every corner of the root and of the depth-1 nodes is

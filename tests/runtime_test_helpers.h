@@ -151,8 +151,10 @@ inline Camera look(glm::vec3 eye, glm::vec3 target) {
 }
 
 // Screen-space error in pixels of `error` at `distance` for a vertical field of view `fovy`,
-// the runtime's formula.
-inline double sse_pixels(double error, double distance, double fovy = kFovy) {
+// the runtime's formula; for an orthographic view `ortho_height` (> 0) model units high, the
+// same at every distance.
+inline double sse_pixels(double error, double distance, double fovy = kFovy, double ortho_height = 0.0) {
+  if (ortho_height > 0.0) return error * kViewportHeight / ortho_height;
   return error * kViewportHeight / (2.0 * std::tan(fovy / 2.0) * distance);
 }
 
@@ -173,14 +175,16 @@ inline bool visible(const Frustum& f, const Bounds& b) {
 
 // The cut written the obvious recursive way, from the manifest (tight bounds of the synthetic
 // tree nest, so node bounds are subtree bounds), for `camera` whose projection has the vertical
-// field of view `fovy`: {manifest node -> lod}.
+// field of view `fovy` (or which is orthographic, `ortho_height` model units high: sse_pixels):
+// {manifest node -> lod}.
 inline void reference_cut(const Manifest& m, const Camera& camera, double target, std::uint32_t node,
-                          std::map<std::uint32_t, std::uint32_t>& out, double fovy = kFovy) {
+                          std::map<std::uint32_t, std::uint32_t>& out, double fovy = kFovy,
+                          double ortho_height = 0.0) {
   const NodeInfo& n = m.nodes[node];
   if (!visible(extract_frustum(camera.projection * camera.view), n.bounds)) return;
   const double d = std::max(box_distance(n.bounds, camera.position), 1e-3);
   for (std::size_t l = n.lods.size(); l-- > 0;) {
-    if (sse_pixels(n.lods[l].error, d, fovy) <= target) {
+    if (sse_pixels(n.lods[l].error, d, fovy, ortho_height) <= target) {
       out[node] = static_cast<std::uint32_t>(l);
       return;
     }
@@ -190,7 +194,7 @@ inline void reference_cut(const Manifest& m, const Camera& camera, double target
     return;
   }
   for (std::int32_t c : n.children)
-    if (c >= 0) reference_cut(m, camera, target, static_cast<std::uint32_t>(c), out, fovy);
+    if (c >= 0) reference_cut(m, camera, target, static_cast<std::uint32_t>(c), out, fovy, ortho_height);
 }
 
 inline std::map<std::uint32_t, std::uint32_t> draws_of(const FrameResult& frame) {

@@ -28,6 +28,8 @@ bool is_usable(const Camera& camera) {
          std::isfinite(camera.viewport_height_px);
 }
 
+bool is_orthographic(const glm::mat4& projection) { return projection[2][3] == 0.0f; }
+
 Frustum extract_frustum(const glm::mat4& m) {
   // GLM is column-major: row i of the matrix is (m[0][i], m[1][i], m[2][i], m[3][i]).
   auto row = [&](int i) { return glm::vec4(m[0][i], m[1][i], m[2][i], m[3][i]); };

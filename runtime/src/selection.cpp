@@ -3,7 +3,8 @@
 // since subtree boxes nest); the error rule is docs/design.md's
 //   error · viewport_h / (2·tan(fovy/2) · distance) <= target_sse_pixels
 // with 1/tan(fovy/2) read from the projection (|projection[1][1]|), rewritten as
-// error <= distance · error_per_distance, so no division per LOD.
+// error <= distance · error_per_distance, so no division per LOD; for an orthographic projection
+// (no division by distance) error · viewport_h · |projection[1][1]| / 2 <= target_sse_pixels.
 #include "selection.h"
 
 #include <algorithm>
@@ -17,6 +18,7 @@ SelectionView make_selection_view(const Camera& camera, const StreamingOptions& 
   v.frustum = extract_frustum(camera.projection * camera.view);
   v.eye = camera.position;
   v.pixels_per_unit = 0.5f * camera.viewport_height_px * std::abs(camera.projection[1][1]);
+  v.orthographic = is_orthographic(camera.projection);
   v.error_per_distance = static_cast<float>(options.target_sse_pixels) / v.pixels_per_unit;
   v.mode = options.mode;
   v.distance_thresholds = &options.distance_thresholds;
@@ -39,7 +41,8 @@ std::uint32_t choose_lod(const TreeLayout& tree, const LayoutNode& n, float true
   if (n.lod_count == 0) return kRefine;
   const float distance = true_distance * view.coarsening;
   if (view.mode == SelectionMode::screen_space_error) {
-    const float allowed = distance * view.error_per_distance;
+    // (orthographic: the coarsening relaxes the target as a distance would)
+    const float allowed = (view.orthographic ? view.coarsening : distance) * view.error_per_distance;
     if (n.min_error > allowed) return n.child_count > 0 ? kRefine : n.lod_begin;
     for (std::uint32_t i = n.lod_count; i-- > 0;)
       if (tree.slot_error[n.lod_begin + i] <= allowed) return n.lod_begin + i;
@@ -104,7 +107,7 @@ bool continue_cut(const TreeLayout& tree, const SelectionView& view, std::vector
     const float distance = std::max(glm::length(delta), tree.min_distance);
     const std::uint32_t slot = choose_lod(tree, n, distance, view);
     if (slot != kRefine) {
-      cut.push_back({entry.node, slot, 2.0f * glm::length(n.half) * view.pixels_per_unit / distance});
+      cut.push_back({entry.node, slot, 2.0f * glm::length(n.half) * view.pixels_at(distance)});
       continue;
     }
     for (std::uint32_t c = n.child_count; c-- > 0;)

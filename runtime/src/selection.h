@@ -17,9 +17,16 @@ namespace octolod::runtime {
 struct SelectionView {
   Frustum frustum;
   glm::vec3 eye{0.0f};               // model space
-  // viewport_h · |projection[1][1]| / 2 = viewport_h / (2·tan(fovy/2)): SSE = error·this / distance
+  // viewport_h · |projection[1][1]| / 2: perspective, viewport_h / (2·tan(fovy/2)), the pixels a
+  // model unit covers at unit distance (SSE = error·this / distance); orthographic, the pixels it
+  // covers at every distance (SSE = error·this)
   float pixels_per_unit = 1.0f;
-  float error_per_distance = 0.0f;   // target_sse / pixels_per_unit: error allowed per unit distance
+  bool orthographic = false;         // is_orthographic(camera.projection)
+  // target_sse / pixels_per_unit: the error allowed per unit distance (perspective), the error
+  // allowed (orthographic)
+  float error_per_distance = 0.0f;
+  // Pixels a model unit covers at `distance` (model units) from the eye.
+  float pixels_at(float distance) const { return orthographic ? pixels_per_unit : pixels_per_unit / distance; }
   SelectionMode mode = SelectionMode::screen_space_error;
   const std::vector<double>* distance_thresholds = nullptr;  // distance mode only
   // >= 1: distances are multiplied by this before choosing (so the allowed error grows, or the
@@ -32,8 +39,8 @@ SelectionView make_selection_view(const Camera& camera, const StreamingOptions& 
 struct WantedLod {
   std::uint32_t node = 0;  // internal (preorder) index
   std::uint32_t slot = 0;  // TreeLayout slot
-  // Projected size of the node's box in pixels (|2·half|·pixels_per_unit / distance): larger and
-  // nearer nodes load first.
+  // Projected size of the node's box in pixels (|2·half|·pixels_at(distance)): larger and nearer
+  // nodes load first.
   float priority = 0.0f;
 };
 

@@ -422,7 +422,7 @@ void StreamingTree::Impl::request_parent_fallback(const WantedLod& wanted, const
   const std::uint32_t slot = tree.slot_end(parent) - 1;
   if (cache.state(slot) == SlotState::absent && candidate_mark[slot] != frame) {
     candidate_mark[slot] = frame;
-    const float size = 2.0f * glm::length(n.half) * view.pixels_per_unit / distance_to_node(tree, parent, view.eye);
+    const float size = 2.0f * glm::length(n.half) * view.pixels_at(distance_to_node(tree, parent, view.eye));
     needed.push_back({size, slot, kFallback});
   }
 }

@@ -11,11 +11,13 @@ namespace octolod::runtime {
 
 struct Camera {
   glm::mat4 view{1.0f};  // model space -> eye space
-  // Eye space -> clip space, a perspective projection in OpenGL convention (glm::perspective; a
-  // [0, 1] depth range, an infinite far plane or a y flip for a y-down clip space work too).
-  // Besides culling, its vertical scale |projection[1][1]| (1/tan(fovy/2), off-centre projections
-  // included) sets how many pixels a model unit covers at unit distance: the field of view of the
-  // screen-space error is the projection's.
+  // Eye space -> clip space in OpenGL convention: a perspective projection (glm::perspective; a
+  // [0, 1] depth range, an infinite far plane or a y flip for a y-down clip space work too) or an
+  // orthographic one (glm::ortho: is_orthographic). Besides culling, its vertical scale
+  // |projection[1][1]| sets how many pixels a model unit covers: at unit distance for a
+  // perspective (1/tan(fovy/2), off-centre projections included: the field of view of the
+  // screen-space error is the projection's), at every distance for an orthographic projection
+  // (2 / the view's height in model units).
   glm::mat4 projection{1.0f};
   glm::vec3 position{0.0f};    // eye position in model space (model units)
   float viewport_height_px = 1080.0f;  // height of the render target in pixels
@@ -25,6 +27,10 @@ struct Camera {
 // scale (projection[1][1] != 0) and a positive viewport height. A NaN eye (lookAt with eye ==
 // target gives a NaN view) would refine every node to its leaves and cull nothing.
 bool is_usable(const Camera& camera);
+
+// Whether `projection` is orthographic (clip w does not depend on depth: projection[2][3] == 0,
+// as glm::ortho makes), so a node's size on screen does not shrink with its distance.
+bool is_orthographic(const glm::mat4& projection);
 
 // A symmetric perspective camera at `eye` looking at `target` (model space), with near/far
 // clip distances in model units and aspect = width / height.

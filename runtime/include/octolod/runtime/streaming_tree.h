@@ -49,7 +49,8 @@ namespace octolod::runtime {
 
 enum class SelectionMode {
   // Coarsest LOD whose screen-space error error·viewport_h / (2·tan(fovy/2)·distance) is at most
-  // target_sse_pixels, with 1/tan(fovy/2) the projection's |projection[1][1]| (camera.h).
+  // target_sse_pixels, with 1/tan(fovy/2) the projection's |projection[1][1]| (camera.h); for an
+  // orthographic projection error·viewport_h·|projection[1][1]|/2, the same at every distance.
   screen_space_error,
   // The seed's pure distance rule (seed 4.5), see StreamingOptions::distance_thresholds.
   distance,
