@@ -618,8 +618,10 @@ Status check_options(const BakeOptions& options) {
                        std::to_string(kMaxOctreeDepth));
   }
   if (options.memory_budget_bytes < options.program_bytes + kMinBakeBudget) {
+    const std::uint64_t minimum = options.program_bytes + kMinBakeBudget;
     return usage_error("memory budget of " + std::to_string(options.memory_budget_bytes) +
-                       " bytes is below the minimum of " + std::to_string(options.program_bytes + kMinBakeBudget));
+                       " bytes is below the minimum of " + std::to_string(minimum) + " bytes (" +
+                       std::to_string((minimum + (1u << 20) - 1) >> 20) + " MiB)");
   }
   if (options.output.empty()) return usage_error("no output directory given");
   OCTOLOD_RETURN_IF_ERROR(check_replaceable(options.output));
