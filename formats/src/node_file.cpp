@@ -130,7 +130,8 @@ Result<NodeMesh> decode_node_file(std::span<const std::byte> bytes, std::string_
   if (crc32(bytes.first(crc_offset)) != detail::load_le<std::uint32_t>(bytes, crc_offset))
     return corrupt(name, crc_offset, "checksum mismatch (file corrupted)");
   mesh.vertices.resize(static_cast<std::size_t>(vertex_floats));
-  std::memcpy(mesh.vertices.data(), bytes.data() + kNodeFileHeaderBytes, mesh.vertices.size() * 4);
+  if (!mesh.vertices.empty())  // (an empty vector's data() may be null, which memcpy must not get)
+    std::memcpy(mesh.vertices.data(), bytes.data() + kNodeFileHeaderBytes, mesh.vertices.size() * 4);
   for (std::size_t i = 0; i < mesh.vertices.size(); ++i)
     if (!std::isfinite(mesh.vertices[i]))
       return corrupt(name, kNodeFileHeaderBytes + i * 4, "non-finite vertex value");
