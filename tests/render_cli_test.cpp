@@ -465,6 +465,32 @@ TEST_F(RenderCli, ExplicitCameraLooksWhereItIsTold) {
   std::filesystem::remove_all(dir);
 }
 
+// --ortho: an orthographic view framing the model, whose cut is the same from near and far
+// (the perspective one coarsens), drawn into a picture; it excludes --fov.
+TEST_F(RenderCli, AnOrthographicViewDrawsTheSameCutFromAnyDistance) {
+  const auto dir = scratch_dir("ortho");
+  runtime::testing::write_tree(runtime::testing::make_full_octree(3), dir / "tree");
+  const auto png = dir / "frame.png";
+  auto render = [&](const std::string& options) {
+    return octolod("--json render " + (dir / "tree").string() + " --width 1024 --height 1024 -o " + png.string() + " " +
+                       options,
+                   dir);
+  };
+  const CliRun near = render("--ortho --camera 32,32,150,32,32,32");
+  const CliRun far = render("--ortho --camera 32,32,1500,32,32,32");
+  ASSERT_EQ(near.exit_code, 0);
+  ASSERT_EQ(far.exit_code, 0);
+  EXPECT_TRUE(near.json.at("orthographic").get<bool>());
+  EXPECT_GT(near.json.at("nodes_drawn").get<int>(), 1);
+  EXPECT_EQ(far.json.at("triangles"), near.json.at("triangles"));
+  EXPECT_EQ(far.json.at("lod_histogram"), near.json.at("lod_histogram"));
+  const CliRun perspective_far = render("--camera 32,32,1500,32,32,32");
+  ASSERT_EQ(perspective_far.exit_code, 0);
+  EXPECT_LT(perspective_far.json.at("triangles").get<int>(), far.json.at("triangles").get<int>());
+  EXPECT_EQ(render("--ortho --fov 30").exit_code, 1);
+  std::filesystem::remove_all(dir);
+}
+
 TEST_F(RenderCli, WalkFramesPngWritesEveryKthFrame) {
   const auto dir = scratch_dir("walk");
   runtime::testing::write_tree(runtime::testing::make_full_octree(3), dir / "tree");

@@ -85,6 +85,7 @@ int run_render(const RenderArgs& args, const CommandContext& context) {
   lens.fovy_radians = static_cast<float>(args.fov_degrees * 3.14159265358979 / 180.0);
   lens.width = args.width;
   lens.height = args.height;
+  if (args.ortho) lens.ortho_height = framing_ortho_height(tree.manifest().bounds, lens.aspect());
   Result<runtime::Camera> camera = args.camera.empty() ? Result<runtime::Camera>(framing_camera(tree.manifest().bounds, lens))
                                                        : parse_camera(args.camera, tree.manifest().bounds, lens);
   if (!camera.ok()) return report(camera.status());
@@ -142,6 +143,7 @@ int run_render(const RenderArgs& args, const CommandContext& context) {
                 {"height", args.height},
                 {"eye", {eye.x, eye.y, eye.z}},
                 {"fov_degrees", args.fov_degrees},
+                {"orthographic", args.ortho},
                 {"target_sse_pixels", args.sse},
                 {"budget_bytes", options.max_resident_bytes},
                 {"updates", updates},

@@ -267,7 +267,13 @@ void add_render_command(CLI::App& app, CommandContext& context) {
   command->add_option("--camera", args->camera,
                       "eye_x,eye_y,eye_z,target_x,target_y,target_z in the tree's frame (model units relative to its "
                       "manifest's origin; default: frame the whole model)");
-  command->add_option("--fov", args->fov_degrees, "Vertical field of view in degrees")->capture_default_str();
+  CLI::Option* fov =
+      command->add_option("--fov", args->fov_degrees, "Vertical field of view in degrees")->capture_default_str();
+  command
+      ->add_flag("--ortho", args->ortho,
+                 "Orthographic view (a top-down or editor camera: the cut does not coarsen with distance), "
+                 "as high as the model's bounding sphere")
+      ->excludes(fov);
   command->add_option("--width", args->width, "Picture width in pixels")->capture_default_str();
   command->add_option("--height", args->height, "Picture height in pixels (the SSE viewport)")->capture_default_str();
   command->add_option("--sse", args->sse, "Screen-space error target in pixels of the picture's height")

@@ -15,6 +15,9 @@ runtime::Camera look_at_camera(glm::vec3 eye, glm::vec3 target, const Lens& lens
                                float far_distance) {
   const glm::vec3 forward = glm::normalize(target - eye);
   const glm::vec3 up = std::abs(forward.y) > 0.99f ? glm::vec3(0, 0, 1) : glm::vec3(0, 1, 0);
+  if (lens.ortho_height > 0.0f)
+    return runtime::make_orthographic_camera(eye, target, up, lens.ortho_height, lens.aspect(), near_distance,
+                                             far_distance, static_cast<float>(lens.height));
   return runtime::make_perspective_camera(eye, target, up, lens.fovy_radians, lens.aspect(), near_distance,
                                           far_distance, static_cast<float>(lens.height));
 }
@@ -35,12 +38,18 @@ runtime::Camera fitted_camera(glm::vec3 eye, glm::vec3 target, const Bounds& bou
 
 runtime::Camera framing_camera(const Bounds& bounds, const Lens& lens) {
   const ModelSphere sphere = model_sphere(bounds);
+  const glm::vec3 direction = glm::normalize(glm::vec3(0.6f, 0.35f, 1.0f));
+  if (lens.ortho_height > 0.0f)
+    return fitted_camera(sphere.center + direction * (2.0f * sphere.radius), sphere.center, bounds, lens);
   const float half_fovy = 0.5f * lens.fovy_radians;
   const float half_fovx = std::atan(std::tan(half_fovy) * lens.aspect());
   // The sphere touches the narrower of the two view cones.
   const float distance = sphere.radius / std::sin(std::min(half_fovy, half_fovx));
-  const glm::vec3 direction = glm::normalize(glm::vec3(0.6f, 0.35f, 1.0f));
   return fitted_camera(sphere.center + direction * distance, sphere.center, bounds, lens);
+}
+
+float framing_ortho_height(const Bounds& bounds, float aspect) {
+  return 2.0f * model_sphere(bounds).radius * std::max(1.0f, 1.0f / aspect);
 }
 
 }  // namespace octolod::cli

@@ -18,16 +18,20 @@ struct ModelSphere {
 };
 ModelSphere model_sphere(const Bounds& bounds);
 
-// What a camera projects onto: vertical field of view and the render target's size in pixels.
+// What a camera projects onto: vertical field of view (or an orthographic view's height) and the
+// render target's size in pixels.
 struct Lens {
   float fovy_radians = 1.0471976f;  // 60 degrees
+  // > 0: an orthographic projection this many model units high instead of a perspective one
+  float ortho_height = 0.0f;
   int width = 1920;
   int height = 1080;
   float aspect() const { return static_cast<float>(width) / static_cast<float>(height); }
 };
 
-// A perspective camera at `eye` looking at `target` with near/far clip distances in model units.
-// Up is +y, or +z when the view direction is (nearly) vertical. eye must differ from target.
+// A perspective (or, with lens.ortho_height, orthographic) camera at `eye` looking at `target`
+// with near/far clip distances in model units. Up is +y, or +z when the view direction is
+// (nearly) vertical. eye must differ from target.
 runtime::Camera look_at_camera(glm::vec3 eye, glm::vec3 target, const Lens& lens, float near_distance,
                                float far_distance);
 
@@ -37,7 +41,12 @@ runtime::Camera look_at_camera(glm::vec3 eye, glm::vec3 target, const Lens& lens
 runtime::Camera fitted_camera(glm::vec3 eye, glm::vec3 target, const Bounds& bounds, const Lens& lens);
 
 // The overview: looks at the model's centre from above and in front (direction (0.6, 0.35, 1)),
-// just far enough that the whole model sphere fits the vertical and horizontal field of view.
+// just far enough that the whole model sphere fits the vertical and horizontal field of view
+// (orthographic: from twice its radius).
 runtime::Camera framing_camera(const Bounds& bounds, const Lens& lens);
+
+// The height (model units) of an orthographic view in which the model sphere of `bounds` fits
+// both ways at `aspect` (width / height).
+float framing_ortho_height(const Bounds& bounds, float aspect);
 
 }  // namespace octolod::cli

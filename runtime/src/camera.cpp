@@ -20,6 +20,18 @@ Camera make_perspective_camera(glm::vec3 eye, glm::vec3 target, glm::vec3 up, fl
   return camera;
 }
 
+Camera make_orthographic_camera(glm::vec3 eye, glm::vec3 target, glm::vec3 up, float view_height,
+                                float aspect, float near_distance, float far_distance,
+                                float viewport_height_px) {
+  Camera camera;
+  camera.view = glm::lookAt(eye, target, up);
+  const float half_height = 0.5f * view_height, half_width = half_height * aspect;
+  camera.projection = glm::ortho(-half_width, half_width, -half_height, half_height, near_distance, far_distance);
+  camera.position = eye;
+  camera.viewport_height_px = viewport_height_px;
+  return camera;
+}
+
 bool is_usable(const Camera& camera) {
   const auto finite = [](const auto& v) { return !glm::any(glm::isnan(v)) && !glm::any(glm::isinf(v)); };
   for (int i = 0; i < 4; ++i)

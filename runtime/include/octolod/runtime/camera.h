@@ -37,6 +37,12 @@ bool is_orthographic(const glm::mat4& projection);
 Camera make_perspective_camera(glm::vec3 eye, glm::vec3 target, glm::vec3 up, float fovy_radians,
                                float aspect, float near_distance, float far_distance,
                                float viewport_height_px);
+// An orthographic camera at `eye` looking at `target` (model space) that sees a view
+// `view_height` model units high (and aspect x that wide) around the line of sight, between the
+// near and far clip distances (model units).
+Camera make_orthographic_camera(glm::vec3 eye, glm::vec3 target, glm::vec3 up, float view_height,
+                                float aspect, float near_distance, float far_distance,
+                                float viewport_height_px);
 
 // A plane n·x + d = 0 with unit normal n pointing into the half-space it keeps.
 struct Plane {
