@@ -4,6 +4,7 @@
 #include <array>
 #include <fstream>
 #include <sstream>
+#include <utility>
 #include <vector>
 
 #include <nlohmann/json.hpp>
@@ -253,17 +254,22 @@ TEST(Manifest, WriteIsAtomicAndReadable) {
   std::filesystem::remove(path);
 }
 
-// A directory named manifest.json, or a FIFO (reading it would block), is refused by name.
+// A directory named manifest.json, a FIFO (reading it would block) or a missing file is refused,
+// naming the path and why.
 TEST(Manifest, OnlyARegularFileIsRead) {
   const auto dir = std::filesystem::path(::testing::TempDir()) / "manifest_test_special";
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir / "manifest.json");
   ASSERT_EQ(::mkfifo((dir / "fifo.json").c_str(), 0600), 0);
-  for (const char* name : {"manifest.json", "fifo.json"}) {
+  for (const auto& [name, why] : {std::pair{"manifest.json", "it is a directory"},
+                                  std::pair{"fifo.json", "it is not a regular file"},
+                                  std::pair{"missing.json", "it does not exist"}}) {
     Result<Manifest> read = read_manifest(dir / name);
     ASSERT_FALSE(read.ok()) << name;
     EXPECT_EQ(read.status().code(), ErrorCode::io);
-    EXPECT_NE(read.status().message().find("not a regular file"), std::string::npos) << read.status().message();
+    EXPECT_NE(read.status().message().find((dir / name).string() + ": cannot read the manifest: " + why),
+              std::string::npos)
+        << read.status().message();
   }
   std::filesystem::remove_all(dir);
 }

@@ -2,10 +2,12 @@
 // streaming in small batches, element orders, skipped elements and properties, property-name
 // aliases, scalar types, polygon fans, and the trailing-bytes rule.
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 
 #include <array>
 #include <cstdio>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "octolod/formats/ply_reader.h"
@@ -89,6 +91,23 @@ INSTANTIATE_TEST_SUITE_P(AllLayouts, PlyRoundTrip, ::testing::ValuesIn(all_layou
                          });
 
 // ---- streaming ----
+
+// Only a regular file is read: a FIFO would block until a writer comes, /dev/zero would never
+// end; each is refused before it is opened, naming the path and why (an I/O error).
+TEST(PlyReader, OnlyARegularFileIsRead) {
+  ScratchDir dir;
+  ASSERT_EQ(::mkfifo(dir.file("fifo.ply").c_str(), 0600), 0);
+  for (const auto& [path, why] : {std::pair{dir.file("fifo.ply"), "it is not a regular file"},
+                                  std::pair{dir.path(), "it is a directory"},
+                                  std::pair{dir.file("missing.ply"), "it does not exist"},
+                                  std::pair{std::filesystem::path("/dev/zero"), "it is not a regular file"}}) {
+    auto reader = PlyReader::open(path);
+    ASSERT_FALSE(reader.ok()) << path;
+    EXPECT_EQ(reader.status().code(), ErrorCode::io);
+    EXPECT_NE(reader.status().message().find(path.string() + ": cannot read the PLY: " + why), std::string::npos)
+        << reader.status().message();
+  }
+}
 
 TEST(PlyReader, StreamsInBatchesNoLargerThanTheBuffer) {
   ScratchDir dir;

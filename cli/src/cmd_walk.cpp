@@ -25,6 +25,7 @@
 #include "frame_render.h"
 #include "image.h"
 #include "line_chart.h"
+#include "octolod/formats/input_file.h"
 #include "octolod/formats/manifest.h"
 #include "octolod/runtime/streaming_tree.h"
 #include "streaming_setup.h"
@@ -50,10 +51,7 @@ glm::vec3 vec(const nlohmann::json& j) {
 
 // {"keyframes": [{"eye": [x,y,z], "target": [x,y,z]}, ...]} in model units, at least two.
 Result<std::vector<Key>> read_keyframes(const std::string& file) {
-  std::error_code error;
-  const auto status = std::filesystem::status(file, error);
-  if (error) return io_error(file + ": cannot open camera path: " + error.message());
-  if (!std::filesystem::is_regular_file(status)) return io_error(file + ": the camera path is not a regular file");
+  OCTOLOD_RETURN_IF_ERROR(check_input_file(file, "the camera path"));
   std::ifstream in(file);
   if (!in) return io_error(file + ": cannot open camera path: " + std::strerror(errno));
   nlohmann::json doc;

@@ -18,6 +18,7 @@
 #include "byte_io.h"
 #include "draco_codec.h"
 #include "octolod/formats/gltf.h"
+#include "octolod/formats/input_file.h"
 
 namespace octolod {
 namespace {
@@ -73,6 +74,7 @@ std::optional<std::vector<std::byte>> decode_base64(std::string_view text) {
 }
 
 Result<std::vector<std::byte>> read_file(const std::filesystem::path& path) {
+  OCTOLOD_RETURN_IF_ERROR(check_input_file(path, "the glTF"));
   std::FILE* f = std::fopen(path.c_str(), "rb");
   if (!f) return io_error(path.string() + ": cannot open: " + std::strerror(errno));
   std::vector<std::byte> bytes;

@@ -14,6 +14,7 @@
 #include <nlohmann/json.hpp>
 
 #include "json_reader.h"
+#include "octolod/formats/input_file.h"
 #include "manifest_sax.h"
 
 namespace octolod {
@@ -319,11 +320,7 @@ Result<Manifest> read_tree_manifest(const std::filesystem::path& tree_root) {
 }
 
 Result<Manifest> read_manifest(const std::filesystem::path& path) {
-  // a directory reads as a failed read, a FIFO would block: only regular files are manifests
-  std::error_code ec;
-  const std::filesystem::file_status status = std::filesystem::status(path, ec);
-  if (!ec && std::filesystem::exists(status) && !std::filesystem::is_regular_file(status))
-    return io_error(path.string() + ": not a regular file");
+  OCTOLOD_RETURN_IF_ERROR(check_input_file(path, "the manifest"));
   std::ifstream in(path, std::ios::binary);
   if (!in) return io_error(path.string() + ": cannot open: " + std::strerror(errno));
   // parsed from the stream: a large tree's text is never held whole (180 MB for 100M triangles)

@@ -13,6 +13,7 @@
 #include <string>
 #include <system_error>
 
+#include "octolod/formats/input_file.h"
 #include "octolod/formats/status.h"
 
 namespace octolod::ply {
@@ -32,6 +33,7 @@ class FileBuffer {
   Status open(const std::filesystem::path& path, std::size_t capacity = kDefaultCapacity) {
     assert(file_ == nullptr && "FileBuffer::open called twice");
     path_ = path.string();
+    OCTOLOD_RETURN_IF_ERROR(check_input_file(path, "the PLY"));
     std::error_code ec;
     file_size_ = std::filesystem::file_size(path, ec);
     if (ec) return io_error(path_ + ": cannot read file size: " + ec.message());
