@@ -481,6 +481,8 @@ TEST_F(RenderCli, AnOrthographicViewDrawsTheSameCutFromAnyDistance) {
   ASSERT_EQ(near.exit_code, 0);
   ASSERT_EQ(far.exit_code, 0);
   EXPECT_TRUE(near.json.at("orthographic").get<bool>());
+  EXPECT_TRUE(near.json.at("fov_degrees").is_null());
+  EXPECT_GT(near.json.at("view_height").get<double>(), 0.0);  // model units: the framed sphere
   EXPECT_GT(near.json.at("nodes_drawn").get<int>(), 1);
   EXPECT_EQ(far.json.at("triangles"), near.json.at("triangles"));
   EXPECT_EQ(far.json.at("lod_histogram"), near.json.at("lod_histogram"));
