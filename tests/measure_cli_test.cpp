@@ -315,6 +315,27 @@ TEST(ExtractCli, LevelDeeperThanTheTreeIsRefused) {
   EXPECT_EQ(json::parse(leaves.out)["node_lods"], 2);
 }
 
+// Bytes after a binary PLY's last element are ignored, as other readers do (some writers pad),
+// but said: more than padding usually means element counts that are too small. bake and eval
+// warn with the count and go on; a file without them gets no warning.
+TEST(BakeCli, WarnsOfBytesAfterTheLastElement) {
+  SKIP_WITHOUT_CLI();
+  TempDir dir;
+  write_mesh(dir / "clean.ply", plane(4, 0.0f));
+  fs::copy_file(dir / "clean.ply", dir / "padded.ply");
+  std::ofstream(dir / "padded.ply", std::ios::binary | std::ios::app) << "3 0 1 2\n";  // 8 bytes
+  const std::string warning = "warning: " + (dir / "padded.ply").string() + ": 8 bytes after the last element were ignored";
+  const CliRun clean = run_cli(dir, "bake " + (dir / "clean.ply").string() + " -o " + (dir / "clean").string());
+  ASSERT_EQ(clean.code, 0) << clean.err;
+  EXPECT_EQ(clean.err.find("warning"), std::string::npos) << clean.err;
+  const CliRun baked = run_cli(dir, "bake " + (dir / "padded.ply").string() + " -o " + (dir / "padded").string());
+  ASSERT_EQ(baked.code, 0) << baked.err;
+  EXPECT_NE(baked.err.find(warning), std::string::npos) << baked.err;
+  const CliRun measured = run_cli(dir, "eval " + (dir / "padded.ply").string() + " " + (dir / "clean.ply").string());
+  ASSERT_EQ(measured.code, 0) << measured.err;
+  EXPECT_NE(measured.err.find(warning), std::string::npos) << measured.err;
+}
+
 // Positions are floats: a model far from the origin (here 1 unit across, 4 million units out,
 // where floats are 0.25 apart) bakes, and the bake says so on stderr; at the origin it does not.
 TEST(BakeCli, WarnsWhenFloatsAreCoarseFarFromTheOrigin) {

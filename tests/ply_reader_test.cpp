@@ -505,17 +505,19 @@ TEST(PlyReader, InfoDescribesTheHeader) {
 
 // ---- trailing data ----
 
-TEST(PlyReader, BinaryIgnoresTrailingBytes) {
+TEST(PlyReader, BinaryIgnoresAndCountsTrailingBytes) {
   ScratchDir dir;
   const test::TestMesh mesh = test::strip_mesh(VertexLayout{}, true);
   for (PlyFormat format : {PlyFormat::binary_little_endian, PlyFormat::binary_big_endian}) {
     const auto path = dir.file("trailing.ply");
     ASSERT_TRUE(write_ply(path, {format, {}, PlyColorType::uchar, {}, {}}, mesh.vertices,
                           mesh.triangles).ok());
+    EXPECT_EQ(read_ok(path).info.trailing_bytes, 0u);
     write_bytes(path, test::read_bytes(path) + std::string("\0\0garbage\n", 10));
     const PlyMesh read = read_ok(path);
     EXPECT_TRUE(same_bits(mesh.vertices, read.vertices));
     EXPECT_EQ(read.triangles, mesh.triangles);
+    EXPECT_EQ(read.info.trailing_bytes, 10u);  // counted, for callers to warn
   }
 }
 

@@ -770,6 +770,7 @@ Result<BakeReport> run_bake(const BakeOptions& given) {
     manifest.stats["lod_kept_bytes_peak"] = static_cast<double>(octree->lod_stats.peak_kept_bytes);
     manifest.stats["lod_streamed_internal_nodes"] = static_cast<double>(octree->lod_stats.streamed_internal_nodes);
     report.soup_in_core = soup->in_core;
+    report.input_trailing_bytes = soup->input_trailing_bytes;
     report.octree_in_memory = soup->mesh_consumed;
     manifest.stats["octree_in_memory"] = soup->mesh_consumed ? 1 : 0;
     report.sort_runs = octree->sort.runs;

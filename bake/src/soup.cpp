@@ -206,6 +206,7 @@ class SoupBuilder {
     result_.triangle_count = split->triangle_count;
     result_.bounds = split->bounds;
     result_.origin = split->origin;
+    result_.input_trailing_bytes = split->trailing_bytes;
     split_wall_ = seconds_since(start);
     split_sort_seconds_ = sorter ? sorter->stats().seconds : 0.0;
     return {};

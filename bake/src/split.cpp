@@ -64,6 +64,7 @@ Result<SplitResult> split_ply(PlyReader& reader, std::size_t batch_bytes, const 
     if (sinks.progress) sinks.progress(done);
   }
   result.origin = reader.info().position_origin;
+  result.trailing_bytes = reader.info().trailing_bytes;
   return result;
 }
 

@@ -38,6 +38,7 @@ struct SplitResult {
   std::uint64_t triangle_count = 0;
   Bounds bounds;  // of all vertices, model units
   std::array<double, 3> origin{0.0, 0.0, 0.0};  // the reader's position_origin (PlyInfo)
+  std::uint64_t trailing_bytes = 0;              // ignored after the last element (PlyInfo)
 };
 
 // Reads `reader` to its end. `batch_bytes` bounds the triangle record batch (at least one

@@ -118,8 +118,9 @@ int run_bake(const BakeArgs& args, const CommandContext& context) {
     return it == seconds.end() ? 0.0 : it->second;
   };
   progress.finish("bake", stage("total"));
+  warn_trailing_bytes(args.input, r.input_trailing_bytes);
   if (const std::optional<std::string> warning = float_precision_warning(r.header.bounds))
-    std::fprintf(stderr, "warning: %s: %s\n", args.input.c_str(), warning->c_str());
+    warn(args.input + ": " + *warning);
   if (context.json) {
     print_json(report_json(r, args.output));
     return 0;

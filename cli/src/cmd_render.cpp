@@ -106,8 +106,8 @@ int run_render(const RenderArgs& args, const CommandContext& context) {
   const runtime::FrameStats& stats = frame->stats;
   const bool complete = stats.loads_in_flight == 0 && stats.loads_issued == 0;
   if (!complete)
-    std::fprintf(stderr, "warning: %s: loads still pending after %d updates; the picture shows fallbacks\n",
-                 args.tree.c_str(), updates);
+    warn(args.tree + ": loads still pending after " + std::to_string(updates) +
+         " updates; the picture shows fallbacks");
 
   // picture
   const FramePainter painter(tree.manifest());

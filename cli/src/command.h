@@ -4,6 +4,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <cstdint>
 #include <string>
 
 #include "octolod/formats/status.h"
@@ -18,6 +19,11 @@ struct CommandContext {
 
 // Prints "error: <message>" on stderr and returns the Status's exit code.
 int report(const Status& status);
+// Prints "warning: <message>" on stderr (the command goes on).
+void warn(const std::string& message);
+// warn()s that `bytes` (> 0) after the last element of the PLY at `path` were ignored
+// (PlyInfo::trailing_bytes); nothing when `bytes` is 0.
+void warn_trailing_bytes(const std::string& path, std::uint64_t bytes);
 // Prints `document` (pretty) on stdout.
 void print_json(const nlohmann::json& document);
 // Parses "64M", "512K", "2G", "1048576" (binary units) into bytes.

@@ -18,6 +18,14 @@ int report(const Status& status) {
   return static_cast<int>(status.code());
 }
 
+void warn(const std::string& message) { std::fprintf(stderr, "warning: %s\n", message.c_str()); }
+
+void warn_trailing_bytes(const std::string& path, std::uint64_t bytes) {
+  if (bytes == 0) return;
+  warn(path + ": " + std::to_string(bytes) +
+       " bytes after the last element were ignored (padding, or element counts in the header that are too small)");
+}
+
 void print_json(const nlohmann::json& document) { std::cout << document.dump(2) << '\n'; }
 
 Result<std::uint64_t> written_file_size(const std::string& path) {

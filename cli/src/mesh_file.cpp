@@ -3,6 +3,7 @@
 #include <string>
 #include <utility>
 
+#include "command.h"
 #include "octolod/formats/ply_reader.h"
 #include "octolod/formats/ply_writer.h"
 
@@ -15,6 +16,7 @@ Result<MeshFile> read_mesh_file(const std::filesystem::path& path,
   options.position_origin = frame;
   Result<PlyMesh> ply = read_ply(path, options);
   if (!ply.ok()) return ply.status();
+  warn_trailing_bytes(path.string(), ply->info.trailing_bytes);
   if (ply->triangles.empty())
     return bad_input_error(path.string() + ": the mesh has no triangles (" +
                            std::to_string(ply->info.vertex_count) + " vertices, " +

@@ -22,7 +22,8 @@ struct MeshFile {
 // Reads a PLY file (any format the streaming reader accepts; polygons fan-triangulated), with
 // positions relative to `frame` (another mesh's or a tree's origin), or when it is not given and
 // the file's positions are double, to its first vertex rounded to whole units (as the bake
-// reads them: geo-referenced coordinates keep their detail). Errors name the file: io when it
+// reads them: geo-referenced coordinates keep their detail). Bytes after the last element are
+// ignored with a warning on stderr (warn_trailing_bytes). Errors name the file: io when it
 // cannot be opened or read, bad_input when it is malformed or holds no triangle (nothing to
 // measure).
 Result<MeshFile> read_mesh_file(const std::filesystem::path& path,

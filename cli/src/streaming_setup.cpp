@@ -1,8 +1,6 @@
 // The streaming runtime's options from a command line (streaming_setup.h).
 #include "streaming_setup.h"
 
-#include <cstdio>
-
 #include "command.h"
 
 namespace octolod::cli {
@@ -14,9 +12,7 @@ Result<runtime::StreamingOptions> streaming_options(const std::string& budget, d
   runtime::StreamingOptions options;
   options.max_resident_bytes = bytes.value();
   options.target_sse_pixels = sse;
-  options.log = [](std::string_view message) {
-    std::fprintf(stderr, "warning: %.*s\n", static_cast<int>(message.size()), message.data());
-  };
+  options.log = [](std::string_view message) { warn(std::string(message)); };
   return options;
 }
 

@@ -290,6 +290,7 @@ class StreamReader final : public PlyReader {
     }
     if (!trailing_checked_) {
       OCTOLOD_RETURN_IF_ERROR(source_.check_trailing());
+      info_.trailing_bytes = in_->file_size() - std::min(in_->offset(), in_->file_size());
       trailing_checked_ = true;
     }
     batch = PlyBatch{};

@@ -162,6 +162,9 @@ struct BakeReport {
   bool octree_in_memory = false; // the octree came from the in-memory mesh (in_memory_octree)
   std::uint64_t sort_runs = 0;   // sorted runs the octree sort wrote (0: in core)
   std::uint64_t peak_rss_bytes = 0;
+  // Bytes after the input's last element, ignored (PlyInfo::trailing_bytes): worth a warning,
+  // since more than padding usually means element counts in the header that are too small.
+  std::uint64_t input_trailing_bytes = 0;
 };
 
 // Bakes options.input into options.output (see the top of this file). Errors: usage for bad

@@ -194,6 +194,8 @@ struct SoupResult {
   Bounds bounds;         // of every vertex in the file (unreferenced ones included), model units
   // The input's point that the positions are relative to (SoupOptions::recentre_double_positions).
   std::array<double, 3> origin{0.0, 0.0, 0.0};
+  // Bytes after the input's last element, which the reader ignores (PlyInfo::trailing_bytes).
+  std::uint64_t input_trailing_bytes = 0;
   bool in_core = false;  // which path was taken
   bool mesh_consumed = false;  // SoupOptions::mesh_sink received the mesh (in core only)
   // Out of core: triangles the window pass left to the three sorted passes.

@@ -27,7 +27,9 @@
 //   after double -> float conversion; positions after the origin is subtracted), not only in
 //   positions, so downstream quadrics and distances never overflow.
 // - ascii: every element entry is on a line of its own (blank lines between entries are fine);
-//   only whitespace may follow the last element. binary: trailing bytes are ignored.
+//   only whitespace may follow the last element. binary: trailing bytes are ignored (some writers
+//   pad) and counted (PlyInfo::trailing_bytes), so that a caller can warn: more than padding
+//   usually means element counts in the header that are too small.
 // - Element entries are counted from 0 in messages ("face 3 of 10" is the fourth face).
 // - Elements without properties take no bytes (and no ascii lines).
 #pragma once
@@ -61,6 +63,9 @@ struct PlyInfo {
   // positions are relative to it. Zeros unless an origin applies; with recentre_double_positions
   // it is known once the first vertex batch has been returned.
   std::array<double, 3> position_origin{0.0, 0.0, 0.0};
+  // Binary: the bytes after the last element, which are ignored; known once next() has returned
+  // Kind::end (0 before, and always 0 for ascii, which refuses anything but whitespace there).
+  std::uint64_t trailing_bytes = 0;
 };
 
 struct PlyReadOptions {
