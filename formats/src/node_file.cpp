@@ -302,7 +302,8 @@ Result<std::uint64_t> NodeFileWriter::finish() {
 
 namespace {
 
-// read_node_file_bytes, checking the size against `expected_bytes` when there is one.
+// The file at `path` read whole (node_file.h's read_node_file_bytes), its size checked against
+// `expected_bytes` when there is one.
 Result<std::vector<std::byte>> read_whole_file(const std::filesystem::path& path,
                                                std::optional<std::uint64_t> expected_bytes) {
   // O_NONBLOCK: opening a FIFO without a writer returns at once, and fstat then refuses it
@@ -324,11 +325,13 @@ Result<std::vector<std::byte>> read_whole_file(const std::filesystem::path& path
   return bytes;
 }
 
-}  // namespace
-
-Result<std::vector<std::byte>> read_node_file_bytes(const std::filesystem::path& path) {
-  return read_whole_file(path, std::nullopt);
+Result<NodeMesh> read_and_decode(const std::filesystem::path& path, std::optional<std::uint64_t> expected_bytes) {
+  Result<std::vector<std::byte>> bytes = read_whole_file(path, expected_bytes);
+  if (!bytes.ok()) return bytes.status();
+  return decode_node_file(bytes.value(), path.string());
 }
+
+}  // namespace
 
 Result<std::vector<std::byte>> read_node_file_bytes(const std::filesystem::path& path,
                                                     std::uint64_t expected_bytes) {
@@ -341,16 +344,10 @@ Status check_node_file_size(std::string_view name, std::uint64_t actual_bytes, s
                          std::to_string(expected_bytes) + " (a node file from elsewhere, or an edited manifest)");
 }
 
-Result<NodeMesh> read_node_file(const std::filesystem::path& path) {
-  Result<std::vector<std::byte>> bytes = read_node_file_bytes(path);
-  if (!bytes.ok()) return bytes.status();
-  return decode_node_file(bytes.value(), path.string());
-}
+Result<NodeMesh> read_node_file(const std::filesystem::path& path) { return read_and_decode(path, std::nullopt); }
 
 Result<NodeMesh> read_node_file(const std::filesystem::path& path, std::uint64_t expected_bytes) {
-  Result<std::vector<std::byte>> bytes = read_node_file_bytes(path, expected_bytes);
-  if (!bytes.ok()) return bytes.status();
-  return decode_node_file(bytes.value(), path.string());
+  return read_and_decode(path, expected_bytes);
 }
 
 }  // namespace octolod

@@ -49,20 +49,19 @@ std::vector<std::byte> encode_node_file(const NodeMesh& mesh);
 Result<NodeMesh> decode_node_file(std::span<const std::byte> bytes, std::string_view name);
 
 Status write_node_file(const std::filesystem::path& path, const NodeMesh& mesh);
-// The bytes of the file at `path`, read whole at the size it has when opened. Errors (io, naming
-// the path): it cannot be opened or read, it is not a regular file (a FIFO would block, a device
-// never end), or it ends before that size.
-Result<std::vector<std::byte>> read_node_file_bytes(const std::filesystem::path& path);
-// The same, for a file whose size is known up front (a manifest's LodInfo::bytes): a file of any
-// other size fails with check_node_file_size's error, found by fstat before anything is allocated
-// or read, so a swapped or corrupt file costs no more memory than the manifest says.
+// The bytes of the file at `path`, read whole, whose size is known up front (a manifest's
+// LodInfo::bytes). Errors: io naming the path when it cannot be opened or read, is not a regular
+// file (a FIFO would block, a device never end) or ends before its size; check_node_file_size's
+// for a file of any other size, found by fstat before anything is allocated or read, so a
+// swapped or corrupt file costs no more memory than the manifest says.
 Result<std::vector<std::byte>> read_node_file_bytes(const std::filesystem::path& path,
                                                     std::uint64_t expected_bytes);
 // bad_input naming `name` (the node file) and both sizes unless `actual_bytes` is the
 // `expected_bytes` the manifest lists for it: another size is another LOD's file, a truncated or
 // padded one, or an edited manifest.
 Status check_node_file_size(std::string_view name, std::uint64_t actual_bytes, std::uint64_t expected_bytes);
-// decode_node_file of read_node_file_bytes(path).
+// decode_node_file of the file at `path` read whole at the size it has (read_node_file_bytes'
+// errors but the size check): a node file without its manifest entry.
 Result<NodeMesh> read_node_file(const std::filesystem::path& path);
 // decode_node_file of read_node_file_bytes(path, expected_bytes): a manifest's node LOD.
 Result<NodeMesh> read_node_file(const std::filesystem::path& path, std::uint64_t expected_bytes);
