@@ -423,55 +423,8 @@ ClusteredMesh build_clustered_mesh(const NodeMesh& mesh, std::span<const std::ar
                          &cluster_position[c * 3], c < known_quadrics ? &clustering.minimizer[c * 3] : nullptr);
   }
 
-  // attribute quadrics, once the positions are known: every triangle's generalized quadric
-  // (Garland & Heckbert 1998) added to the wedge of each of its solved corners as the block
-  // the attribute solve needs with the wedge's position fixed (quadric.h, add_triangle_free_block: 44
-  // doubles per wedge with every attribute instead of the 78 of a whole quadric). The blocks
-  // are summed and solved a window of wedges at a time, one pass over the triangles per window
-  // (each block still sums its triangles in triangle order): the working set holds the blocks
-  // of 2048 wedges, or of a sixteenth of them in a larger node, instead of every wedge's (352
-  // bytes each: the largest single array of an internal node's working set).
-  const int m = attribute_count;
-  const std::size_t block_size = m > 0 ? free_block_doubles(m) : 0;
-  std::vector<std::uint32_t> slot_of_wedge(m > 0 ? wedge_count : 0, 0);  // among the solved wedges
-  std::uint32_t solved_wedges = 0;
-  for (std::size_t w = 0; w < slot_of_wedge.size(); ++w)
-    if (solved(static_cast<std::uint32_t>(order[w]))) slot_of_wedge[w] = solved_wedges++;
-  // wedges per window: at least kBlockWindow, at most kMaxBlockPasses passes over the triangles
-  constexpr std::size_t kBlockWindow = 2048, kMaxBlockPasses = 16;
-  const std::size_t window_size = std::max(kBlockWindow, (std::size_t{solved_wedges} + kMaxBlockPasses - 1) / kMaxBlockPasses);
-  std::vector<double> window_block;
-  auto sum_window_blocks = [&](std::size_t first_slot, std::size_t end_slot) {
-    window_block.assign((end_slot - first_slot) * block_size, 0.0);
-    auto in_window = [&](std::uint32_t v) {
-      if (!solved(v)) return false;
-      const std::uint32_t slot = slot_of_wedge[wedge[v]];
-      return slot >= first_slot && slot < end_slot;
-    };
-    for (std::size_t t = 0; t < triangle_count; ++t) {
-      const std::uint32_t* corner = &mesh.indices[3 * t];
-      if (!in_window(corner[0]) && !in_window(corner[1]) && !in_window(corner[2])) continue;
-      const double area = triangle_area(t);
-      if (!(area > 0.0)) continue;
-      double p[3][kMaxQuadricDim];
-      for (int k = 0; k < 3; ++k) {
-        local_vertex(corner[k], p[k]);
-        for (int i = 0; i < 3; ++i) p[k][i] *= position_scale;
-      }
-      TriangleFreePart part;
-      if (!triangle_free_part(n, p[0], p[1], p[2], area, part)) continue;
-      for (int k = 0; k < 3; ++k) {
-        const std::uint32_t v = corner[k];
-        if (!in_window(v)) continue;
-        const std::uint32_t slot = slot_of_wedge[wedge[v]];
-        double x[3];
-        for (int i = 0; i < 3; ++i) x[i] = cluster_position[cluster[v] * 3 + static_cast<std::size_t>(i)] * position_scale;
-        add_triangle_free_block(part, x, &window_block[(slot - first_slot) * block_size]);
-      }
-    }
-  };
-
-  std::size_t window_end = 0;  // slots [window_end - window size, window_end) have their blocks
+  // every wedge's record but the attributes of the solved ones: those are solved below for the
+  // wedges the output uses, once it is known (nothing before reads attributes)
   for (std::size_t w = 0; w < wedge_count; ++w) {
     const auto root = static_cast<std::uint32_t>(order[w]);
     float* record = &wedge_record[w * stride];
@@ -480,33 +433,18 @@ ClusteredMesh build_clustered_mesh(const NodeMesh& mesh, std::span<const std::ar
       continue;
     }
     const std::uint32_t c = cluster[root];
-    double v[kMaxQuadricDim];
     if (cluster_vertices[c] == 1) {  // the vertex itself (see `solved`), attributes finished
       std::memcpy(record, &mesh.vertices[root * stride], 3 * 4);
+      double v[kMaxQuadricDim];
       local_vertex(root, v);
       const double up[3] = {0.0, 0.0, 1.0};  // for a zero normal (finish_attributes' own last resort)
       finish_attributes(layout, up, v + 3);
       for (int i = 3; i < n; ++i) record[i] = static_cast<float>(v[i]);
       continue;
     }
-    if (attribute_count > 0) {
-      const std::uint32_t slot = slot_of_wedge[w];
-      if (slot >= window_end) {
-        const std::size_t first = slot;
-        window_end = std::min<std::size_t>(solved_wedges, first + window_size);
-        sum_window_blocks(first, window_end);
-      }
-      const std::size_t window_first = window_end - window_block.size() / block_size;
-      double mean[kMaxQuadricDim];
-      for (int i = 0; i < n; ++i) mean[i] = wedge_sum[w * stride + static_cast<std::size_t>(i)] / wedge_vertices[w];
-      minimize_free_block(m, &window_block[(slot - window_first) * block_size], mean + 3, v + 3);
-      finish_attributes(layout, layout.normal ? mean + 3 : nullptr, v + 3);
-    }
-    for (int i = 0; i < 3; ++i) v[i] = cluster_position[c * 3 + static_cast<std::size_t>(i)];
-    for (int i = 0; i < 3; ++i) record[i] = static_cast<float>(v[i] + origin[static_cast<std::size_t>(i)]);
-    for (int i = 3; i < n; ++i) record[i] = static_cast<float>(v[i]);
+    for (int i = 0; i < 3; ++i)
+      record[i] = static_cast<float>(cluster_position[c * 3 + static_cast<std::size_t>(i)] + origin[static_cast<std::size_t>(i)]);
   }
-  window_block = {};
 
   // candidate triangles: sources counted per cluster triple (the triple table freed before the
   // flips build their edge table)
@@ -549,12 +487,91 @@ ClusteredMesh build_clustered_mesh(const NodeMesh& mesh, std::span<const std::ar
   }
   std::vector<std::uint32_t> wedge_cluster(wedge_count);
   for (std::size_t w = 0; w < wedge_count; ++w) wedge_cluster[w] = static_cast<std::uint32_t>(order[w] >> 32);
-  const ClusteredOutput clustered{mesh, cluster, clustering.count, wedge_cluster, wedge_record, wedge};
-  InputDistances input(clustered);
-  flip_diagonals(input, kept);
-  const FoldRepair folds = remove_folded_fans(input, kept);
+  candidates = {};
+  FoldRepair folds;
+  {  // (the input's triangles per cluster, which the passes gather, freed before the attribute solves)
+    const ClusteredOutput clustered{mesh, cluster, clustering.count, wedge_cluster, wedge_record, wedge};
+    InputDistances input(clustered);
+    flip_diagonals(input, kept);
+    folds = remove_folded_fans(input, kept);
+  }
   for (std::uint32_t& o : output_of_candidate)
     if (o != kNoTriangle) o = folds.index[o];
+  // attribute quadrics, once the positions and the output's triangles are known: every
+  // triangle's generalized quadric (Garland & Heckbert 1998) added to the wedge of each of its
+  // solved corners that the output uses (1.39M of the 4.12M solved wedges of a 1M city bake are
+  // not: their clusters keep no triangle) as the block the attribute solve needs with the
+  // wedge's position fixed (quadric.h, add_triangle_free_block: 44 doubles per wedge with every
+  // attribute instead of the 78 of a whole quadric). The blocks are summed and solved a window
+  // of wedges at a time, one pass over the triangles per window (each block still sums its
+  // triangles in triangle order): the working set holds the blocks of 2048 wedges, or of a
+  // sixteenth of them in a larger node, instead of every wedge's (352 bytes each: the largest
+  // single array of an internal node's working set).
+  const int m = attribute_count;
+  const std::size_t block_size = m > 0 ? free_block_doubles(m) : 0;
+  // per wedge, its place among the solved wedges the output uses, or kNoSlot
+  constexpr std::uint32_t kNoSlot = 0xFFFFFFFFu;
+  std::vector<std::uint32_t> slot_of_wedge;
+  std::uint32_t solved_wedges = 0;
+  if (m > 0) {
+    std::vector<std::uint8_t> used(wedge_count, 0);
+    for (const std::uint32_t w : kept) used[w] = 1;
+    slot_of_wedge.assign(wedge_count, kNoSlot);
+    for (std::size_t w = 0; w < wedge_count; ++w)
+      if (used[w] && solved(static_cast<std::uint32_t>(order[w]))) slot_of_wedge[w] = solved_wedges++;
+  }
+  // wedges per window: at least kBlockWindow, at most kMaxBlockPasses passes over the triangles
+  constexpr std::size_t kBlockWindow = 2048, kMaxBlockPasses = 16;
+  const std::size_t window_size = std::max(kBlockWindow, (std::size_t{solved_wedges} + kMaxBlockPasses - 1) / kMaxBlockPasses);
+  std::vector<double> window_block;
+  auto sum_window_blocks = [&](std::size_t first_slot, std::size_t end_slot) {
+    window_block.assign((end_slot - first_slot) * block_size, 0.0);
+    auto in_window = [&](std::uint32_t v) {
+      const std::uint32_t slot = slot_of_wedge[wedge[v]];  // kNoSlot for a vertex not solved
+      return slot >= first_slot && slot < end_slot;
+    };
+    for (std::size_t t = 0; t < triangle_count; ++t) {
+      const std::uint32_t* corner = &mesh.indices[3 * t];
+      if (!in_window(corner[0]) && !in_window(corner[1]) && !in_window(corner[2])) continue;
+      const double area = triangle_area(t);
+      if (!(area > 0.0)) continue;
+      double p[3][kMaxQuadricDim];
+      for (int k = 0; k < 3; ++k) {
+        local_vertex(corner[k], p[k]);
+        for (int i = 0; i < 3; ++i) p[k][i] *= position_scale;
+      }
+      TriangleFreePart part;
+      if (!triangle_free_part(n, p[0], p[1], p[2], area, part)) continue;
+      for (int k = 0; k < 3; ++k) {
+        const std::uint32_t v = corner[k];
+        if (!in_window(v)) continue;
+        const std::uint32_t slot = slot_of_wedge[wedge[v]];
+        double x[3];
+        for (int i = 0; i < 3; ++i) x[i] = cluster_position[cluster[v] * 3 + static_cast<std::size_t>(i)] * position_scale;
+        add_triangle_free_block(part, x, &window_block[(slot - first_slot) * block_size]);
+      }
+    }
+  };
+
+  std::size_t window_end = 0;  // slots [window_end - window size, window_end) have their blocks
+  for (std::size_t w = 0; w < slot_of_wedge.size(); ++w) {
+    const std::uint32_t slot = slot_of_wedge[w];
+    if (slot == kNoSlot) continue;
+    if (slot >= window_end) {
+      const std::size_t first = slot;
+      window_end = std::min<std::size_t>(solved_wedges, first + window_size);
+      sum_window_blocks(first, window_end);
+    }
+    const std::size_t window_first = window_end - window_block.size() / block_size;
+    double mean[kMaxQuadricDim], v[kMaxQuadricDim];
+    for (int i = 0; i < n; ++i) mean[i] = wedge_sum[w * stride + static_cast<std::size_t>(i)] / wedge_vertices[w];
+    minimize_free_block(m, &window_block[(slot - window_first) * block_size], mean + 3, v + 3);
+    finish_attributes(layout, layout.normal ? mean + 3 : nullptr, v + 3);
+    float* record = &wedge_record[w * stride];
+    for (int i = 3; i < n; ++i) record[i] = static_cast<float>(v[i]);
+  }
+  window_block = {};
+
   result.mesh = mesh_of_used_records(layout, wedge_record, kept);
   std::vector<std::uint32_t> kept_cluster(kept.size());
   for (std::size_t i = 0; i < kept.size(); ++i) kept_cluster[i] = wedge_cluster[kept[i]];
