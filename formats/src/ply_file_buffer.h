@@ -11,7 +11,7 @@
 #include <filesystem>
 #include <memory>
 #include <string>
-#include <system_error>
+#include <sys/stat.h>
 
 #include "octolod/formats/input_file.h"
 #include "octolod/formats/status.h"
@@ -33,12 +33,13 @@ class FileBuffer {
   Status open(const std::filesystem::path& path, std::size_t capacity = kDefaultCapacity) {
     assert(file_ == nullptr && "FileBuffer::open called twice");
     path_ = path.string();
-    OCTOLOD_RETURN_IF_ERROR(check_input_file(path, "the PLY"));
-    std::error_code ec;
-    file_size_ = std::filesystem::file_size(path, ec);
-    if (ec) return io_error(path_ + ": cannot read file size: " + ec.message());
+    OCTOLOD_RETURN_IF_ERROR(check_input_file(path, "the PLY"));  // before opening: a FIFO would block
     file_ = std::fopen(path_.c_str(), "rb");
     if (file_ == nullptr) return io_error(path_ + ": cannot open: " + std::strerror(errno));
+    // the size of the file opened, not of whatever the path names by now
+    struct stat opened {};
+    if (fstat(fileno(file_), &opened) != 0) return io_error(path_ + ": cannot read file size: " + std::strerror(errno));
+    file_size_ = static_cast<std::uint64_t>(opened.st_size);
     // Our own buffer is the only one: stdio buffering would copy every byte twice.
     std::setvbuf(file_, nullptr, _IONBF, 0);
     capacity_ = capacity;
