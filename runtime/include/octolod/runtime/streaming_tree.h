@@ -146,6 +146,12 @@ struct FrameStats {
   std::uint32_t second_chance_hits = 0;  // of those, reclaimed from the free list without I/O
   std::uint32_t cache_misses = 0;      // wanted LODs that were not resident
   std::uint32_t fallbacks = 0;         // DrawItems with is_fallback
+  // Nodes checked this frame while looking for resident descendants to stand in for wanted LODs
+  // that were not resident, at most StreamingOptions::max_cover_checks_per_frame ...
+  std::uint32_t cover_checks = 0;
+  // ... and the wanted LODs whose cover was given up because those checks ran out: the nearest
+  // resident ancestor drew there instead (coarser) this frame.
+  std::uint32_t covers_out_of_checks = 0;
   std::uint64_t wanted_bytes = 0;   // decoded size of the whole wanted cut
   // 1 when the cut meets target_sse_pixels (or the distance thresholds); otherwise the factor by
   // which distances were scaled up (the error target relaxed) to fit max_cut_fraction of the budget.
