@@ -430,8 +430,9 @@ TEST(Paging, LoadsTheBudgetHasNoRoomForAreCounted) {
 // Pulled back from the 64 resident leaves, the camera wants the 8 depth-1 nodes, none resident
 // (no prefetch, and the leaves loaded in one go, so no parent was asked for as a fallback):
 // each is covered by its 8 leaves, 8 checks apiece. With 20 checks a frame the
-// third cover runs out, is given up, and the pinned root (the nearest resident ancestor) draws
-// in place of everything; with the default the 64 leaves stand in. Before, covers had no bound.
+// third cover runs out, is given up (FrameStats::covers_out_of_checks), and the pinned root (the
+// nearest resident ancestor) draws in place of everything; with the default the 64 leaves stand
+// in. Before, covers had no bound.
 TEST(Paging, CoveringByDescendantsChecksAtMostTheFramesNodes) {
   const Camera near = front(100.0f), far = front(200.0f);  // all leaves; the depth-1 nodes' LOD 0
   for (const std::uint32_t checks : {20u, StreamingOptions{}.max_cover_checks_per_frame}) {
@@ -445,9 +446,13 @@ TEST(Paging, CoveringByDescendantsChecksAtMostTheFramesNodes) {
     ASSERT_EQ(frame.stats.cache_misses, 8u);
     if (checks == 20u) {
       EXPECT_EQ(draws_of(frame), (std::map<std::uint32_t, std::uint32_t>{{0, 1}}));
+      EXPECT_EQ(frame.stats.cover_checks, 20u);
+      EXPECT_EQ(frame.stats.covers_out_of_checks, 1u);  // the root then draws the other five too
     } else {
       EXPECT_EQ(frame.stats.drawn_nodes, 64u);
       for (const DrawItem& d : frame.draws) EXPECT_EQ(d.depth, 2u);
+      EXPECT_EQ(frame.stats.cover_checks, 64u);
+      EXPECT_EQ(frame.stats.covers_out_of_checks, 0u);
     }
     EXPECT_EQ(frame.stats.fallbacks, frame.stats.drawn_nodes);
     expect_covering_cut(fx.tree, frame, far);

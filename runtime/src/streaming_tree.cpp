@@ -94,7 +94,8 @@ struct StreamingTree::Impl {
   }
   void resolve(const SelectionView& view, FrameStats& stats);
   bool substitute_same_node(const WantedLod& wanted);
-  bool cover_with_descendants(std::uint32_t node, const Frustum& frustum);
+  enum class Cover { drawn, impossible, out_of_checks };
+  Cover cover_with_descendants(std::uint32_t node, const Frustum& frustum);
   bool substitute_ancestor(std::uint32_t node, std::uint32_t& covered_end);
   void request_nearest_ancestor(const WantedLod& wanted);
   void request_parent_fallback(const WantedLod& wanted, const SelectionView& view);
@@ -316,7 +317,9 @@ void StreamingTree::Impl::resolve(const SelectionView& view, FrameStats& stats) 
     }
     if (substitute_same_node(w)) continue;
     if (cache.state(w.slot) == SlotState::bad) request_nearest_ancestor(w);
-    if (cover_with_descendants(w.node, view.frustum)) continue;
+    const Cover cover = cover_with_descendants(w.node, view.frustum);
+    if (cover == Cover::drawn) continue;
+    if (cover == Cover::out_of_checks) ++stats.covers_out_of_checks;
     if (substitute_ancestor(w.node, covered_end)) {
       request_parent_fallback(w, view);
       continue;
@@ -324,6 +327,7 @@ void StreamingTree::Impl::resolve(const SelectionView& view, FrameStats& stats) 
     ++stats.holes;
     if (candidate < needed.size()) needed[candidate].urgency = kHole;
   }
+  stats.cover_checks = options.max_cover_checks_per_frame - cover_checks_left;
 }
 
 // The nearest coarser resident LOD of the node, else the nearest finer one.
@@ -345,17 +349,18 @@ bool StreamingTree::Impl::substitute_same_node(const WantedLod& wanted) {
 }
 
 // Draws every visible child by its coarsest resident LOD, or recursively by its own children;
-// all or nothing. Subtrees without any resident LOD fail at once, and so does the whole cover
-// when the frame's checks (one per child looked at) run out, so that a frame's covers check at
-// most max_cover_checks_per_frame nodes.
-bool StreamingTree::Impl::cover_with_descendants(std::uint32_t node, const Frustum& frustum) {
+// all or nothing. Subtrees without any resident LOD fail at once (impossible), and so does the
+// whole cover when the frame's checks (one per child looked at) run out (out_of_checks), so that
+// a frame's covers check at most max_cover_checks_per_frame nodes.
+StreamingTree::Impl::Cover StreamingTree::Impl::cover_with_descendants(std::uint32_t node,
+                                                                       const Frustum& frustum) {
   const LayoutNode& n = tree.nodes[node];
-  if (n.child_count == 0 || cache.subtree_resident(node) == 0) return false;
+  if (n.child_count == 0 || cache.subtree_resident(node) == 0) return Cover::impossible;
   const std::size_t mark = draws.size();
   for (std::uint32_t i = 0; i < n.child_count; ++i) {
     if (cover_checks_left == 0) {
       draws.resize(mark);
-      return false;
+      return Cover::out_of_checks;
     }
     --cover_checks_left;
     const std::uint32_t child = tree.children[n.child_begin + i];
@@ -367,12 +372,12 @@ bool StreamingTree::Impl::cover_with_descendants(std::uint32_t node, const Frust
       draws.push_back({child, slot, true});
       continue;
     }
-    if (!cover_with_descendants(child, frustum)) {
+    if (const Cover below = cover_with_descendants(child, frustum); below != Cover::drawn) {
       draws.resize(mark);
-      return false;
+      return below;
     }
   }
-  return true;
+  return Cover::drawn;
 }
 
 // The nearest ancestor with a resident LOD (its finest) replaces its whole subtree: draws already
