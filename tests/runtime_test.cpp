@@ -1077,13 +1077,26 @@ TEST(Disk, WalkCommandReplaysAPathAndReportsJson) {
     return cells;
   };
   const std::vector<std::string> header = columns(line);
-  const auto over_budget = std::find(header.begin(), header.end(), "loads_over_budget");
-  ASSERT_NE(over_budget, header.end()) << line;
-  int lines = 1, over_budget_rows = 0;
-  for (; std::getline(rows, line); ++lines)
-    over_budget_rows += std::stoi(columns(line).at(static_cast<std::size_t>(over_budget - header.begin()))) > 0;
+  const auto column = [&](const char* name) {
+    const auto at = std::find(header.begin(), header.end(), name);
+    EXPECT_NE(at, header.end()) << name << " not in " << line;
+    return static_cast<std::size_t>(at - header.begin());
+  };
+  const std::size_t over_budget = column("loads_over_budget"), checks = column("cover_checks"),
+                    out_of_checks = column("covers_out_of_checks");
+  ASSERT_EQ(header.size(), out_of_checks + 1) << line;
+  int lines = 1, over_budget_rows = 0, out_of_checks_rows = 0, max_checks = 0;
+  for (; std::getline(rows, line); ++lines) {
+    const std::vector<std::string> cells = columns(line);
+    ASSERT_EQ(cells.size(), header.size()) << line;
+    over_budget_rows += std::stoi(cells[over_budget]) > 0;
+    out_of_checks_rows += std::stoi(cells[out_of_checks]) > 0;
+    max_checks = std::max(max_checks, std::stoi(cells[checks]));
+  }
   EXPECT_EQ(lines, 121);  // header + one row per frame
   EXPECT_EQ(doc.at("frames_over_budget"), over_budget_rows);
+  EXPECT_EQ(doc.at("frames_out_of_cover_checks"), out_of_checks_rows);
+  EXPECT_EQ(doc.at("max_cover_checks"), max_checks);
   std::filesystem::remove_all(dir);
 }
 

@@ -137,7 +137,7 @@ void write_csv_row(std::ostream& csv, std::uint32_t frame, const runtime::FrameS
       << ',' << s.loads_over_budget
       << ',' << s.cache_hits << ',' << s.cache_misses << ',' << s.second_chance_hits << ','
       << s.fallbacks << ',' << s.holes << ',' << s.coarsening << ',' << s.selection_ms << ','
-      << s.selection_cpu_ms << '\n';
+      << s.selection_cpu_ms << ',' << s.cover_checks << ',' << s.covers_out_of_checks << '\n';
 }
 
 }  // namespace
@@ -202,7 +202,8 @@ int run_walk(const WalkArgs& args, const CommandContext& context) {
     std::ostringstream csv;
     csv << "frame,visited,culled,wanted,drawn_nodes,drawn_triangles,resident_bytes,reserved_bytes,"
            "loads_issued,loads_completed,loads_cancelled,loads_failed,loads_over_budget,cache_hits,cache_misses,"
-           "second_chance_hits,fallbacks,holes,coarsening,selection_ms,selection_cpu_ms\n";
+           "second_chance_hits,fallbacks,holes,coarsening,selection_ms,selection_cpu_ms,cover_checks,"
+           "covers_out_of_checks\n";
     for (std::uint32_t i = 0; i < stats.size(); ++i) write_csv_row(csv, i, stats[i]);
     const std::string text = std::move(csv).str();
     const Status written = write_file_atomically(args.csv, "the CSV", [&](std::FILE* file) {
@@ -216,6 +217,7 @@ int run_walk(const WalkArgs& args, const CommandContext& context) {
                 cancelled = 0, failed = 0;
   double resident_sum = 0, triangles_sum = 0, max_coarsening = 1;
   std::uint32_t waiting_frames = 0, fallback_frames = 0, hole_frames = 0, over_budget_frames = 0;
+  std::uint32_t max_cover_checks = 0, out_of_checks_frames = 0;  // covers by resident descendants
   std::vector<double> ms, cpu_ms;
   for (const runtime::FrameStats& s : stats) {
     max_resident = std::max(max_resident, s.resident_bytes);
@@ -232,6 +234,8 @@ int run_walk(const WalkArgs& args, const CommandContext& context) {
     fallback_frames += (s.fallbacks > 0 || s.holes > 0) ? 1u : 0u;
     hole_frames += s.holes > 0 ? 1u : 0u;
     over_budget_frames += s.loads_over_budget > 0 ? 1u : 0u;
+    max_cover_checks = std::max(max_cover_checks, s.cover_checks);
+    out_of_checks_frames += s.covers_out_of_checks > 0 ? 1u : 0u;
     max_coarsening = std::max(max_coarsening, static_cast<double>(s.coarsening));
     ms.push_back(s.selection_ms);
     cpu_ms.push_back(s.selection_cpu_ms);
@@ -254,6 +258,8 @@ int run_walk(const WalkArgs& args, const CommandContext& context) {
                      {"fallback_frames", fallback_frames},
                      {"hole_frames", hole_frames},
                      {"frames_over_budget", over_budget_frames},
+                     {"max_cover_checks", max_cover_checks},
+                     {"frames_out_of_cover_checks", out_of_checks_frames},
                      {"loads", loads},
                      {"loads_issued", issued},
                      {"loads_cancelled", cancelled},
@@ -307,6 +313,8 @@ int run_walk(const WalkArgs& args, const CommandContext& context) {
     std::printf("  frames waiting on I/O %u, frames with fallbacks %u (with holes %u), frames with loads the "
                 "budget had no room for %u\n",
                 waiting_frames, fallback_frames, hole_frames, over_budget_frames);
+    std::printf("  covers by resident descendants: at most %u checks a frame (cap %u), frames that gave one up %u\n",
+                max_cover_checks, options.max_cover_checks_per_frame, out_of_checks_frames);
     std::printf("  selection ms: p50 %.4f, p99 %.4f, max %.4f (thread CPU: p50 %.4f, p99 %.4f, max %.4f)\n",
                 percentile(ms, 0.5), percentile(ms, 0.99), ms.empty() ? 0.0 : *std::max_element(ms.begin(), ms.end()),
                 percentile(cpu_ms, 0.5), percentile(cpu_ms, 0.99),
