@@ -91,16 +91,16 @@ void symmetric_eigen(int m, Matrix& a, Vector& values, Matrix& vectors) {
 }
 
 // Solves M x = rhs by an LDL^T factorization, M symmetric m x m given by its upper triangle
-// packed row by row (as a free block holds it, quadric.h), when every pivot exceeds
-// kPseudoInverseThreshold times the largest diagonal entry, i.e. when M is comfortably full
-// rank; false (x untouched) otherwise. The fast path of minimize_free_block: the attribute
+// packed row by row and rhs by minus the m values after it, as a free block holds them
+// (quadric.h), when every pivot exceeds kPseudoInverseThreshold times the largest diagonal
+// entry, i.e. when M is comfortably full rank; false (x untouched) otherwise. The fast path of minimize_free_block: the attribute
 // blocks of generalized quadrics are nearly always well conditioned (99.4% of the 4.8M solves
 // of a 1M city bake), and a factorization costs a small fraction of an eigen-decomposition.
-// Read from the packed block, with m known at compile time: the same arithmetic after a copy
-// into an 11 x 11 matrix took 170 ns instead of 135 for m = 8 (every attribute) and 31 instead
-// of 17 for m = 3 (bench/cluster_bench).
+// Read from the packed block, with m known at compile time: the same arithmetic after copies
+// into an 11 x 11 matrix and a right-hand side took 170 ns instead of 127 for m = 8 (every
+// attribute), 31 instead of 9 for m = 3 (bench/cluster_bench).
 template <int m>
-bool solve_packed_well_conditioned(const double* packed, const double* rhs, double* x) {
+bool solve_packed_well_conditioned(const double* packed, double* x) {
   // packed row i holds M[i][i..m): M[i][j] (i <= j) at row_start[i] + j - i
   constexpr auto row_start = [] {
     std::array<int, m> start{};
@@ -130,8 +130,9 @@ bool solve_packed_well_conditioned(const double* packed, const double* rhs, doub
     }
   }
   std::array<double, m> y{};
+  const double* tail = packed + m * (m + 1) / 2;
   for (int i = 0; i < m; ++i) {  // L y = rhs
-    double v = rhs[i];
+    double v = -tail[i];
     for (int k = 0; k < i; ++k) v -= at(i, k) * y[static_cast<std::size_t>(k)];
     y[static_cast<std::size_t>(i)] = v;
   }
@@ -361,13 +362,13 @@ void add_free_block(int n, int k, const double* q, const double* x, double* acc)
 
 void minimize_free_block(int m, const double* block, const double* mean_free, double* free) {
   assert(m >= 1 && m <= kMaxQuadricDim && "free coordinates must be 1..kMaxQuadricDim");
+  const bool solved = with_fixed_dimension(m, [&](auto fixed) {
+    return solve_packed_well_conditioned<decltype(fixed)::value>(block, free);
+  });
+  if (solved) return;
   const double* tail = block + m * (m + 1) / 2;  // b_f + A_fx v_x
   Vector rhs{};
   for (int i = 0; i < m; ++i) rhs[static_cast<std::size_t>(i)] = -tail[i];
-  const bool solved = with_fixed_dimension(m, [&](auto fixed) {
-    return solve_packed_well_conditioned<decltype(fixed)::value>(block, rhs.data(), free);
-  });
-  if (solved) return;
   Matrix mat;  // only its m x m block, written below, is read
   const double* row = block;
   for (int i = 0; i < m; ++i) {
