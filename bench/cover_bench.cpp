@@ -39,6 +39,7 @@
 
 #include "octolod/formats/manifest.h"
 #include "octolod/runtime/streaming_tree.h"
+#include "percentile.h"
 
 namespace {
 
@@ -149,11 +150,6 @@ std::vector<Path> make_paths(const Bounds& bounds, const PathSettings& settings)
     move(cold.runs.back(), dir, 6.0f, 6.0f, 30);
   }
   return {dive, dive_small, teleport, skim, cold};
-}
-
-double percentile(std::vector<double> v, double p) {
-  std::sort(v.begin(), v.end());
-  return v[std::min(v.size() - 1, static_cast<std::size_t>(p * static_cast<double>(v.size() - 1) + 0.5))];
 }
 
 std::string cap_name(std::uint32_t cap) { return cap == kUnlimited ? "unlimited" : std::to_string(cap); }

@@ -21,6 +21,7 @@
 #include "octolod/formats/manifest.h"
 #include "octolod/formats/node_file.h"
 #include "octolod/runtime/streaming_tree.h"
+#include "percentile.h"
 
 namespace {
 
@@ -109,11 +110,6 @@ class SyntheticSource final : public NodeSource {
  private:
   const Manifest& manifest_;
 };
-
-double percentile(std::vector<double> v, double p) {
-  std::sort(v.begin(), v.end());
-  return v[std::min(v.size() - 1, static_cast<std::size_t>(p * static_cast<double>(v.size() - 1) + 0.5))];
-}
 
 }  // namespace
 
