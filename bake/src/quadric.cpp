@@ -93,9 +93,10 @@ void symmetric_eigen(int m, Matrix& a, Vector& values, Matrix& vectors) {
 // Solves M x = rhs by an LDL^T factorization, M symmetric m x m given by its upper triangle
 // packed row by row and rhs by minus the m values after it, as a free block holds them
 // (quadric.h), when every pivot exceeds kPseudoInverseThreshold times the largest diagonal
-// entry, i.e. when M is comfortably full rank; false (x untouched) otherwise. The fast path of minimize_free_block: the attribute
-// blocks of generalized quadrics are nearly always well conditioned (99.4% of the 4.8M solves
-// of a 1M city bake), and a factorization costs a small fraction of an eigen-decomposition.
+// entry, i.e. when M is comfortably full rank; false (x untouched) otherwise. The fast path of
+// minimize_free_block: the attribute blocks of generalized quadrics are nearly always well
+// conditioned (99.4% of the 4.8M solves of a 1M city bake), and a factorization costs a small
+// fraction of an eigen-decomposition.
 // Read from the packed block, with m known at compile time: the same arithmetic after copies
 // into an 11 x 11 matrix and a right-hand side took 170 ns instead of 127 for m = 8 (every
 // attribute), 31 instead of 9 for m = 3 (bench/cluster_bench).

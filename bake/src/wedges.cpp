@@ -527,7 +527,7 @@ ClusteredMesh build_clustered_mesh(const NodeMesh& mesh, std::span<const std::ar
   auto sum_window_blocks = [&](std::size_t first_slot, std::size_t end_slot) {
     window_block.assign((end_slot - first_slot) * block_size, 0.0);
     auto in_window = [&](std::uint32_t v) {
-      const std::uint32_t slot = slot_of_wedge[wedge[v]];  // kNoSlot for a vertex not solved
+      const std::uint32_t slot = slot_of_wedge[wedge[v]];  // kNoSlot: not solved, or not in the output
       return slot >= first_slot && slot < end_slot;
     };
     for (std::size_t t = 0; t < triangle_count; ++t) {

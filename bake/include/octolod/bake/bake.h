@@ -73,8 +73,8 @@ struct BakeOptions {
   // its triangles; one holding more than max_depth_leaf_triangles(memory_budget_bytes, layout,
   // max_tris) is spilled to a temporary file and built streaming (memory bounded by
   // that cap, not by the leaf): LOD 0 its original triangles, stored per chunk of four times
-  // that many (a vertex shared by two chunks is stored twice), LOD 1 a vertex clustering of at most that
-  // many triangles (and half the leaf) with the leaf's boundary kept and attributes per
+  // that many (a vertex shared by two chunks is stored twice), LOD 1 a vertex clustering of at
+  // most that many triangles (and half the leaf) with the leaf's boundary kept and attributes per
   // wedge (a cell's corners grouped by their attributes, so seams are not averaged across),
   // the rest of the chain from LOD 1: a coarser
   // first step than an in-memory leaf's halving; raise max_depth for dense models when that

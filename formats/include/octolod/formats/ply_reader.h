@@ -12,8 +12,9 @@
 // is skipped.
 //
 // Errors (Status bad_input unless noted) name the file and the line (ascii) or byte offset
-// (binary): a path that is not a regular file (io: check_input_file, input_file.h), truncation, bad magic/format line, unknown types, counts the file cannot hold, face
-// lists with < 3 or > 2^20 entries, indices negative or >= vertex count, NaN/Inf or values
+// (binary): a path that is not a regular file (io: check_input_file, input_file.h),
+// truncation, bad magic/format line, unknown types, counts the file cannot hold, face lists
+// with < 3 or > 2^20 entries, indices negative or >= vertex count, NaN/Inf or values
 // beyond ±kMaxVertexValue (1e18, vertex_layout.h), a header over 1 MiB or without end_header,
 // declared elements missing. Vertex counts >= 2^32 are `unsupported` (indices are 32-bit).
 //
