@@ -13,6 +13,7 @@
 #include <algorithm>
 #include <cerrno>
 #include <chrono>
+#include <cmath>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
@@ -550,6 +551,11 @@ TEST_F(BakeTest, BadOptionsAndPathsAreReportedBeforeAnythingIsWritten) {
   o = options("out");
   o.memory_budget_bytes = 1000;
   EXPECT_EQ(bake(o).status().code(), ErrorCode::usage);
+  for (const double ratio : {0.0, 0.09, 0.51, 1.0, std::nan("")}) {
+    o = options("out");
+    o.lod_ratio = ratio;
+    EXPECT_EQ(bake(o).status().code(), ErrorCode::usage) << ratio;
+  }
   o = options("out");
   o.max_tris = 1'000'000;  // leaf buffers cannot fit a 16 MiB budget
   EXPECT_EQ(bake(o).status().code(), ErrorCode::usage);
@@ -846,8 +852,19 @@ TEST_F(BakeTest, CliExitCodesForWriteFailureBadInputAndUnwritableOutput) {
   EXPECT_EQ(WEXITSTATUS(status), 4);
   expect_no_temp_files();
 
-  status = wait_status(spawn_cli(bake_args(small_ply(), path("out"), work())));
+  // A LOD ratio outside [0.1, 0.5]: a usage error before anything is written; inside, the
+  // manifest records it.
+  std::vector<std::string> args = bake_args(small_ply(), path("out"), work());
+  args.insert(args.end(), {"--lod-ratio", "0.7"});
+  status = wait_status(spawn_cli(args));
+  EXPECT_EQ(WEXITSTATUS(status), 1);
+  EXPECT_FALSE(fs::exists(path("out")));
+  args.back() = "0.3";
+  status = wait_status(spawn_cli(args));
   EXPECT_EQ(WEXITSTATUS(status), 0);
+  auto manifest = read_manifest(path("out") / "manifest.json");
+  ASSERT_TRUE(manifest.ok()) << manifest.status().message();
+  EXPECT_EQ(manifest->parameters.lod_ratio, 0.3);
   status = wait_status(spawn_cli({"--json", "info", path("out").string()}));
   EXPECT_EQ(WEXITSTATUS(status), 0);
   status = wait_status(spawn_cli({"info", path("missing").string()}));

@@ -125,11 +125,14 @@ fs::path LodTreeTest::root_;
 // The length of the model's bounding box diagonal, model units.
 // --- the chains ---
 
-TEST_F(LodTreeTest, EveryNodeHasAChainWhoseErrorsGrowAsItsTrianglesShrink) {
-  const LoadedTree t = bake_and_load(options(rock_ply(), "chains"));
+// Every node of the tree baked into `dir` has LOD files as its manifest lists them, each at most
+// `ratio` times the triangles of the one before and no less wrong; internal nodes are no finer
+// and no less wrong than the children's LODs they come from; the root ends in a coarse LOD.
+void expect_chains(const LoadedTree& t, const fs::path& dir, double ratio) {
   const Manifest& m = t.manifest;
   ASSERT_GT(m.nodes.size(), 9u);
   EXPECT_EQ(m.parameters.method, "grid");
+  EXPECT_EQ(m.parameters.lod_ratio, ratio);
   std::size_t internal = 0;
   for (std::size_t i = 0; i < m.nodes.size(); ++i) {
     const NodeInfo& n = m.nodes[i];
@@ -140,14 +143,15 @@ TEST_F(LodTreeTest, EveryNodeHasAChainWhoseErrorsGrowAsItsTrianglesShrink) {
       EXPECT_EQ(l.file, (n.path.empty() ? "" : n.path + "/") + "lod" + std::to_string(k) + ".olod");
       EXPECT_EQ(mesh.triangle_count(), l.triangles);
       EXPECT_EQ(mesh.vertex_count(), l.vertices);
-      EXPECT_EQ(fs::file_size(root_ / "chains" / l.file), l.bytes);
+      EXPECT_EQ(fs::file_size(dir / l.file), l.bytes);
       EXPECT_TRUE(std::isfinite(l.error));
       Bounds b = n.bounds;
       b.extend(mesh.bounds());
       EXPECT_EQ(b, n.bounds) << "LOD " << k << " of '" << n.path << "' sticks out of its bounds";
       if (k > 0) {
-        // Each step at most halves (build_lods' reduction), and errors accumulate.
-        EXPECT_LE(2 * l.triangles, n.lods[k - 1].triangles) << n.path << " LOD " << k;
+        // Each step keeps at most `ratio` of the triangles (build_lods' reduction), and errors
+        // accumulate.
+        EXPECT_LE(l.triangles, std::floor(ratio * n.lods[k - 1].triangles)) << n.path << " LOD " << k;
         EXPECT_GE(l.error, n.lods[k - 1].error) << n.path << " LOD " << k;
       }
     }
@@ -183,6 +187,33 @@ TEST_F(LodTreeTest, EveryNodeHasAChainWhoseErrorsGrowAsItsTrianglesShrink) {
   EXPECT_GE(root.lods.size(), 2u);
   EXPECT_LE(root.lods.back().triangles, 2u * 256u);
   EXPECT_GT(root.lods.back().error, 0.0);
+}
+
+TEST_F(LodTreeTest, EveryNodeHasAChainWhoseErrorsGrowAsItsTrianglesShrink) {
+  const BakeOptions o = options(rock_ply(), "chains");
+  expect_chains(bake_and_load(o), o.output, 0.5);
+}
+
+// A lower lod_ratio steps each chain down faster: fewer LODs, fewer bytes, the same leaves.
+TEST_F(LodTreeTest, ALowerLodRatioGivesShorterChainsOfLargerSteps) {
+  BakeOptions o = options(rock_ply(), "quarter-chains");
+  o.lod_ratio = 0.25;
+  const LoadedTree quarter = bake_and_load(o);
+  expect_chains(quarter, o.output, 0.25);
+  const LoadedTree half = bake_and_load(options(rock_ply(), "half-chains"));
+  ASSERT_EQ(half.manifest.nodes.size(), quarter.manifest.nodes.size());
+  std::size_t half_lods = 0, quarter_lods = 0;
+  std::uint64_t half_bytes = 0, quarter_bytes = 0;
+  for (std::size_t i = 0; i < half.manifest.nodes.size(); ++i) {
+    const NodeInfo &h = half.manifest.nodes[i], &q = quarter.manifest.nodes[i];
+    EXPECT_EQ(h.path, q.path);
+    if (h.is_leaf()) EXPECT_EQ(h.lods.front().triangles, q.lods.front().triangles) << h.path;
+    half_lods += h.lods.size(), quarter_lods += q.lods.size();
+    for (const LodInfo& l : h.lods) half_bytes += l.bytes;
+    for (const LodInfo& l : q.lods) quarter_bytes += l.bytes;
+  }
+  EXPECT_LT(quarter_lods, half_lods);
+  EXPECT_LT(quarter_bytes, 0.8 * static_cast<double>(half_bytes));
 }
 
 // A LOD of a positions-only mesh with one vertex per two triangles: 18 bytes per triangle

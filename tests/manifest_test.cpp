@@ -3,6 +3,7 @@
 
 #include <array>
 #include <fstream>
+#include <string>
 #include <sstream>
 #include <utility>
 #include <vector>
@@ -67,6 +68,26 @@ TEST(Manifest, OriginKeepsEveryDigitAndDefaultsToZeroWhenAbsent) {
   EXPECT_EQ(older->origin, (std::array<double, 3>{0.0, 0.0, 0.0}));
   old["origin"] = {1.0, 2.0};
   EXPECT_FALSE(manifest_from_json(old.dump(), "short.json").ok());
+}
+
+TEST(Manifest, LodRatioRoundTripsAndIsAHalfWhenAbsent) {
+  Manifest m = small_manifest();
+  m.parameters.lod_ratio = 0.3;
+  Result<Manifest> back = manifest_from_json(manifest_to_json(m), "m.json");
+  ASSERT_TRUE(back.ok()) << back.status().message();
+  EXPECT_EQ(back->parameters.lod_ratio, 0.3);
+  // a manifest from before bake --lod-ratio existed: every chain halved
+  nlohmann::json old = nlohmann::json::parse(manifest_to_json(m));
+  old["parameters"].erase("lod_ratio");
+  Result<Manifest> older = manifest_from_json(old.dump(), "old.json");
+  ASSERT_TRUE(older.ok()) << older.status().message();
+  EXPECT_EQ(older->parameters.lod_ratio, 0.5);
+  for (const nlohmann::json& bad : {nlohmann::json(0.0), nlohmann::json(1.0), nlohmann::json(-0.5), nlohmann::json("half")}) {
+    old["parameters"]["lod_ratio"] = bad;
+    Result<Manifest> refused = manifest_from_json(old.dump(), "bad.json");
+    EXPECT_EQ(refused.status().code(), ErrorCode::bad_input) << bad.dump();
+    EXPECT_NE(refused.status().message().find("bad.json"), std::string::npos) << refused.status().message();
+  }
 }
 
 // The manifest is written node by node, never as one document: its text must still be exactly

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <functional>
 #include <limits>
@@ -298,6 +299,7 @@ LodTreeOptions lod_tree_options(const BakeOptions& options, VertexLayout layout,
   o.longest_input_edge = longest_input_edge;
   o.build_lods = options.lods;
   o.lod.method = options.method;
+  o.lod.reduction = options.lod_ratio;
   o.workers = workers;
   o.queue_bytes = budget.queue_bytes;
   o.keep_bytes = budget.keep_bytes;
@@ -569,6 +571,7 @@ Result<Manifest> manifest_header(const BakeOptions& options, unsigned threads,
   m.parameters.memory_budget_bytes = options.memory_budget_bytes + options.program_bytes;
   m.parameters.threads = threads;
   m.parameters.method = options.lods ? std::string(method_name(options.method)) : "";
+  m.parameters.lod_ratio = options.lod_ratio;
   auto root = octree.lods->read(0);
   if (!root.ok()) return root.status();
   m.bounds = root->lods.bounds;  // the subtree's: the whole model's
@@ -622,6 +625,12 @@ Status check_options(const BakeOptions& options) {
     return usage_error("memory budget of " + std::to_string(options.memory_budget_bytes) +
                        " bytes is below the minimum of " + std::to_string(minimum) + " bytes (" +
                        std::to_string((minimum + (1u << 20) - 1) >> 20) + " MiB)");
+  }
+  if (!(options.lod_ratio >= kMinLodRatio && options.lod_ratio <= kMaxLodRatio)) {
+    char text[120];
+    std::snprintf(text, sizeof text, "lod_ratio %g is outside [%g, %g]", options.lod_ratio, kMinLodRatio,
+                  kMaxLodRatio);
+    return usage_error(text);
   }
   if (options.output.empty()) return usage_error("no output directory given");
   OCTOLOD_RETURN_IF_ERROR(check_replaceable(options.output));

@@ -653,7 +653,8 @@ Result<StreamedLeafLods> build_streamed_leaf(const fs::path& records, const fs::
   const Survey& survey = builder.surveyed();
 
   OCTOLOD_RETURN_IF_ERROR(builder.find_boundary_positions(edges.path(), sorted_edges.path()));
-  const std::uint64_t limit = std::min<std::uint64_t>(options.max_lod1_triangles, survey.triangles / 2);
+  const auto ratio_limit = static_cast<std::uint64_t>(std::floor(static_cast<double>(survey.triangles) * options.lod.reduction));
+  const std::uint64_t limit = std::min<std::uint64_t>(options.max_lod1_triangles, ratio_limit);
   if (limit == 0) return result;
   auto g = builder.choose_resolution(limit);
   if (!g.ok()) return g.status();

@@ -25,9 +25,9 @@
 //          per cluster triple: once when odd, a two-sided pair for a thin sheet), with the wedges
 //          of a source triangle. The resolution is searched by counting passes (a resolution whose
 //          distinct cluster triples pass twice the limit counts as too fine, so memory stays
-//          bounded by the limit) for at most min(max_lod1_triangles, half the input) triangles. Its
-//          error bound is the max over chunks of hausdorff_upper_bound(chunk, LOD 1): the distance
-//          from the input decomposes over any partition of the input.
+//          bounded by the limit) for at most min(max_lod1_triangles, lod.reduction x the input)
+//          triangles. Its error bound is the max over chunks of hausdorff_upper_bound(chunk,
+//          LOD 1): the distance from the input decomposes over any partition of the input.
 //   LOD 2+ build_lods from LOD 1 and its error, in memory.
 //
 // The same path builds an internal node whose children's LODs are too large to merge in memory
@@ -88,7 +88,7 @@ struct StreamedLeafOptions {
   VertexLayout layout;  // of the soup records
   Bounds cell;          // the leaf's octree cell, model units
   bool build_lods = true;  // false: LOD 0 only
-  LodOptions lod;          // the chain's method and limits (the chain starts at LOD 1)
+  LodOptions lod;          // the chain's method, limits and reduction (the chain starts at LOD 1)
   // Triangles held in memory at once (a chunk of records and its indexed mesh, about 3 soup
   // records per triangle); LOD 0 stores a vertex once per chunk that uses it. >= 1.
   std::uint64_t chunk_triangles = 1 << 16;

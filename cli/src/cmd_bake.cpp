@@ -41,7 +41,8 @@ nlohmann::json report_json(const bake::BakeReport& r, const std::string& output)
             {"max_depth", m.parameters.max_depth},
             {"memory_budget_bytes", m.parameters.memory_budget_bytes},
             {"threads", m.parameters.threads},
-            {"method", m.parameters.method}}},
+            {"method", m.parameters.method},
+            {"lod_ratio", m.parameters.lod_ratio}}},
           {"lods", r.lods},
           {"root_coarsest_triangles", r.root_coarsest_triangles},
           {"stage_seconds", m.stage_seconds},
@@ -82,6 +83,7 @@ int run_bake(const BakeArgs& args, const CommandContext& context) {
   options.work_dir = args.work_dir;
   options.threads = args.threads;
   options.force_out_of_core = args.out_of_core;
+  options.lod_ratio = args.lod_ratio;
   if (args.method == "none") {
     options.lods = false;
   } else {

@@ -198,9 +198,10 @@ int run_info(const std::string& tree, const CommandContext& context) {
   std::printf("bytes       %.2f MB (LOD files %.2f MB, manifest %.2f MB)\n",
               static_cast<double>(s.lod_bytes + s.manifest_bytes) / 1e6,
               static_cast<double>(s.lod_bytes) / 1e6, static_cast<double>(s.manifest_bytes) / 1e6);
-  std::printf("parameters  max-tris %u, max-depth %u, memory %.1f MiB, threads %u%s%s\n",
-              p.max_tris, p.max_depth, static_cast<double>(p.memory_budget_bytes) / (1 << 20),
-              p.threads, p.method.empty() ? "" : ", method ", p.method.c_str());
+  std::printf("parameters  max-tris %u, max-depth %u, memory %.1f MiB, threads %u", p.max_tris, p.max_depth,
+              static_cast<double>(p.memory_budget_bytes) / (1 << 20), p.threads);
+  if (!p.method.empty()) std::printf(", method %s, lod-ratio %g", p.method.c_str(), p.lod_ratio);
+  std::printf("\n");
   print_levels("LOD index (0 = each node's finest)", "index", s.by_index, false);
   print_levels("per depth", "depth", s.by_depth, true);
   if (!m.nodes.empty() && !m.nodes[0].lods.empty()) {

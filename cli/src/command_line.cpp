@@ -14,6 +14,7 @@
 #include <string>
 
 #include "commands.h"
+#include "octolod/bake/bake.h"
 
 namespace octolod::cli {
 namespace {
@@ -99,6 +100,14 @@ void add_bake_command(CLI::App& app, CommandContext& context) {
                    "triangles")
       ->capture_default_str()
       ->check(CLI::IsMember({"grid", "bade2006", "none"}));
+  command
+      ->add_option("--lod-ratio", args->lod_ratio,
+                   "Each LOD has at most this fraction of the previous LOD's triangles; lower: fewer "
+                   "LODs and a smaller tree, with coarser steps for a runtime to choose from (the 1M "
+                   "rock at 0.25: half the bake time, 56% of the bytes; docs/benchmarks.md, \"The "
+                   "LOD ratio\")")
+      ->capture_default_str()
+      ->check(CLI::Range(bake::kMinLodRatio, bake::kMaxLodRatio));
   command->add_flag("--out-of-core", args->out_of_core,
                     "Take the out-of-core soup path even when the vertices fit the budget");
   command->callback([args, &context] { context.exit_code = run_bake(*args, context); });

@@ -25,6 +25,7 @@ struct BakeArgs {
   unsigned threads = 0;
   bool out_of_core = false;
   std::string method = "grid";
+  double lod_ratio = 0.5;
 };
 
 struct CompareArgs {

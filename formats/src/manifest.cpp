@@ -136,7 +136,8 @@ json parameters_to_json(const BakeParameters& p) {
           {"max_depth", p.max_depth},
           {"memory_budget_bytes", p.memory_budget_bytes},
           {"threads", p.threads},
-          {"method", p.method}};
+          {"method", p.method},
+          {"lod_ratio", p.lod_ratio}};
 }
 
 json node_to_json(const NodeInfo& n) {
@@ -264,6 +265,9 @@ Result<Manifest> manifest_from_reader(const Read& read, std::string_view name) {
                                   integer_at<std::uint64_t>(p, "memory_budget_bytes"),
                                   integer_at<std::uint32_t>(p, "threads"),
                                   p.at("method").get<std::string>()};
+    if (p.contains("lod_ratio")) m.parameters.lod_ratio = p.at("lod_ratio").get<double>();
+    if (!(m.parameters.lod_ratio > 0.0 && m.parameters.lod_ratio < 1.0))
+      return invalid(name, "\"parameters.lod_ratio\" is not in (0, 1)");
     m.stage_seconds = doc.at("stage_seconds").get<std::map<std::string, double>>();
     m.stats = doc.at("stats").get<std::map<std::string, double>>();
     if (!doc.at("nodes").is_array()) return invalid(name, "\"nodes\" is not an array");

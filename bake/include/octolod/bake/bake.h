@@ -22,7 +22,7 @@
 // renamed into place only when complete: a failed or interrupted bake leaves no OUT_DIR (or the
 // previous one, untouched) and no temporary file.
 //
-// The output depends only on the input and (max_tris, max_depth, lods, method): not on the
+// The output depends only on the input and (max_tris, max_depth, lods, method, lod_ratio): not on the
 // budget, the thread count or the work directory (the manifest's parameters, stage_seconds and
 // stats aside), except for the leaves at max_depth larger than max_depth_leaf_triangles of the
 // budget, whose LODs are built streaming in chunks of that size (see max_depth below).
@@ -123,8 +123,18 @@ struct BakeOptions {
   bool lods = true;
   // Clustering operator of every simplification step (simplify.h). The output depends on it.
   ClusterMethod method = ClusterMethod::grid;
+  // Each LOD of a node's chain has at most this fraction of the previous LOD's triangles (and
+  // a streamed leaf's LOD 1 of its input's), in [kMinLodRatio, kMaxLodRatio]. Lower: fewer
+  // LODs, a faster bake and fewer bytes, with larger steps between the LODs a runtime chooses
+  // from (docs/benchmarks.md, "The LOD ratio"). The output depends on it.
+  double lod_ratio = 0.5;
   BakeProgressFn progress;
 };
+
+// The range of BakeOptions::lod_ratio: at most half (each LOD halves the triangles at least),
+// at least a tenth (coarser steps leave a runtime little to choose from).
+inline constexpr double kMinLodRatio = 0.1;
+inline constexpr double kMaxLodRatio = 0.5;
 
 // "grid" / "bade2006": the names of the CLI's --method and of the manifest's parameters.method.
 std::string_view method_name(ClusterMethod method);

@@ -61,6 +61,9 @@ struct BakeParameters {
   std::uint64_t memory_budget_bytes = 0;
   std::uint32_t threads = 0;
   std::string method;           // clustering method, "" when no LODs were built
+  // Each LOD of a chain has at most this fraction of the previous LOD's triangles (bake
+  // --lod-ratio), in (0, 1). Absent in manifests of bakes before 2026-12-04: 0.5.
+  double lod_ratio = 0.5;
 };
 
 struct Manifest {
