@@ -207,7 +207,9 @@ TEST_F(LodTreeTest, ALowerLodRatioGivesShorterChainsOfLargerSteps) {
   for (std::size_t i = 0; i < half.manifest.nodes.size(); ++i) {
     const NodeInfo &h = half.manifest.nodes[i], &q = quarter.manifest.nodes[i];
     EXPECT_EQ(h.path, q.path);
-    if (h.is_leaf()) EXPECT_EQ(h.lods.front().triangles, q.lods.front().triangles) << h.path;
+    if (h.is_leaf()) {
+      EXPECT_EQ(h.lods.front().triangles, q.lods.front().triangles) << h.path;
+    }
     half_lods += h.lods.size(), quarter_lods += q.lods.size();
     for (const LodInfo& l : h.lods) half_bytes += l.bytes;
     for (const LodInfo& l : q.lods) quarter_bytes += l.bytes;
