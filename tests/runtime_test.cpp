@@ -1083,17 +1083,29 @@ TEST(Disk, WalkCommandReplaysAPathAndReportsJson) {
     return static_cast<std::size_t>(at - header.begin());
   };
   const std::size_t over_budget = column("loads_over_budget"), checks = column("cover_checks"),
-                    out_of_checks = column("covers_out_of_checks");
+                    out_of_checks = column("covers_out_of_checks"), wanted = column("wanted"),
+                    visited = column("visited");
   ASSERT_EQ(header.size(), out_of_checks + 1) << line;
   int lines = 1, over_budget_rows = 0, out_of_checks_rows = 0, max_checks = 0;
+  std::vector<int> wanted_per_frame, visited_per_frame;
   for (; std::getline(rows, line); ++lines) {
     const std::vector<std::string> cells = columns(line);
     ASSERT_EQ(cells.size(), header.size()) << line;
     over_budget_rows += std::stoi(cells[over_budget]) > 0;
     out_of_checks_rows += std::stoi(cells[out_of_checks]) > 0;
     max_checks = std::max(max_checks, std::stoi(cells[checks]));
+    wanted_per_frame.push_back(std::stoi(cells[wanted]));
+    visited_per_frame.push_back(std::stoi(cells[visited]));
   }
   EXPECT_EQ(lines, 121);  // header + one row per frame
+  // The path's 60-degree perspective refines as it nears: from 12 r the root's coarse LOD (error
+  // 2.56) is 3.6 px, so the root's fine one is wanted alone; at 0.6 r the camera is at the
+  // cube's face and the cut reaches the leaves. (Its cameras were once orthographic, 1,920 units
+  // high: every frame wanted only the root.)
+  ASSERT_EQ(wanted_per_frame.size(), 120u);
+  EXPECT_EQ(wanted_per_frame.front(), 1);
+  EXPECT_GT(wanted_per_frame.back(), 8);
+  EXPECT_GT(visited_per_frame.back(), 9);
   EXPECT_EQ(doc.at("frames_over_budget"), over_budget_rows);
   EXPECT_EQ(doc.at("frames_out_of_cover_checks"), out_of_checks_rows);
   EXPECT_EQ(doc.at("max_cover_checks"), max_checks);

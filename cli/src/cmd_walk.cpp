@@ -35,8 +35,10 @@ namespace octolod::cli {
 namespace {
 
 // Selection runs for a 1920x1080 view with a 60 degree vertical field of view; --frames-png
-// pictures are rendered at half that size with the same projection.
-constexpr Lens kLens{1.0471976f, 1920, 1080};
+// pictures are rendered at half that size with the same projection. (Named fields: a positional
+// {fov, 1920, 1080} put 1,920 into Lens::ortho_height when that field was added, and every path
+// was walked as an orthographic view 1,920 units high.)
+constexpr Lens kLens{.fovy_radians = 1.0471976f, .ortho_height = 0.0f, .width = 1920, .height = 1080};
 constexpr int kFrameWidth = 960;
 constexpr int kFrameHeight = 540;
 
