@@ -18,6 +18,7 @@
 #include "cluster.h"
 #include "error_bound.h"
 #include "flat_hash.h"
+#include "inside_out.h"
 #include "node_index.h"
 #include "octolod/bake/external_sort.h"
 #include "octolod/bake/soup.h"
@@ -454,6 +455,7 @@ class StreamedLeafBuilder {
         lod.indices.push_back(it->second);
       }
     }
+    rewind_inside_out(lod);
     return lod;
   }
 

@@ -11,6 +11,7 @@
 #include "diagonal_flips.h"
 #include "flat_hash.h"
 #include "folded_fans.h"
+#include "inside_out.h"
 #include "point_triangle.h"
 #include "quadric.h"
 
@@ -228,14 +229,13 @@ std::vector<std::array<float, 3>> position_facings(const NodeMesh& mesh, const P
   return facing;
 }
 
-bool orient_kept_triangle(const std::array<const float*, 3>& record, bool even,
-                          const std::array<double, 3>& source_normal, std::array<std::uint32_t, 3>& corner) {
+bool orient_kept_triangle(const std::array<const float*, 3>& record, const std::array<double, 3>& facing,
+                          std::array<std::uint32_t, 3>& corner) {
   if (std::memcmp(record[0], record[1], 12) == 0 || std::memcmp(record[1], record[2], 12) == 0 ||
       std::memcmp(record[0], record[2], 12) == 0)
     return false;
   const std::array<double, 3> normal = triangle_normal(record[0], record[1], record[2]);
-  const double agreement = (even ? 1.0 : -1.0) * (normal[0] * source_normal[0] + normal[1] * source_normal[1] +
-                                                  normal[2] * source_normal[2]);
+  const double agreement = normal[0] * facing[0] + normal[1] * facing[1] + normal[2] * facing[2];
   if (agreement < 0.0) std::swap(corner[1], corner[2]);
   return true;
 }
@@ -573,6 +573,7 @@ ClusteredMesh build_clustered_mesh(const NodeMesh& mesh, std::span<const std::ar
   window_block = {};
 
   result.mesh = mesh_of_used_records(layout, wedge_record, kept);
+  rewind_inside_out(result.mesh);
   std::vector<std::uint32_t> kept_cluster(kept.size());
   for (std::size_t i = 0; i < kept.size(); ++i) kept_cluster[i] = wedge_cluster[kept[i]];
   result.vertex_cluster = cluster;

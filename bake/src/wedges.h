@@ -94,7 +94,8 @@ void place_representative(const double* quadric, const double* mean, const Clamp
 // Then the diagonals of bent quads that pass further from the input than the other diagonal
 // would are flipped (diagonal_flips.h), and folded three-triangle fans replaced by their
 // neighbours' triangle (folded_fans.h); neither changes the boundary mod 2. Unused vertices are
-// removed; output vertices are in (cluster, smallest vertex id of the wedge) order.
+// removed; output vertices are in (cluster, smallest vertex id of the wedge) order. Last,
+// triangles turned inside out among their neighbours are re-wound (inside_out.h).
 struct ClusteredMesh {
   NodeMesh mesh;
   // Per input triangle: an output triangle at or next to its image (the image itself when it
@@ -197,24 +198,25 @@ class KeptTriangleCounter {
   std::size_t kept_ = 0;
 };
 
-// A kept cluster triple's triangle with corners `corner` at the vertex records `record`, first
-// source winding like the sorted triple iff `even`, its sources' area-weighted normals summed
-// in the sorted triple's winding in `source_normal`: false when two corners have bit-identical
-// positions (the triangle is dropped), else true with corners 1 and 2 swapped where its normal
-// disagrees with its sources' (re-wound, not dropped: dropping would open the surface).
-bool orient_kept_triangle(const std::array<const float*, 3>& record, bool even,
-                          const std::array<double, 3>& source_normal, std::array<std::uint32_t, 3>& corner);
+// A kept cluster triple's triangle with corners `corner` at the vertex records `record`, to
+// face like `facing` (model space; its sources' area-weighted normals, each in its own winding):
+// false when two corners have bit-identical positions (the triangle is dropped), else true with
+// corners 1 and 2 swapped where its normal points away from `facing` (re-wound, not dropped:
+// dropping would open the surface).
+bool orient_kept_triangle(const std::array<const float*, 3>& record, const std::array<double, 3>& facing,
+                          std::array<std::uint32_t, 3>& corner);
 
 // The sources of one cluster triple as the output rule counts them (build_clustered_mesh and the
 // streamed leaf): how many, how many wind like the sorted triple, which winding came first, and
-// their area-weighted normals in the sorted triple's winding (all of them, and those winding
-// like it).
+// their area-weighted normals: in the sorted triple's winding (all of them, and those winding
+// like it), and each in its own winding (which way the input surface faces there).
 struct TripleSources {
   std::uint32_t count = 0;
   std::uint32_t like_sorted = 0;
   bool first_is_like = false;
   std::array<double, 3> normal{};
   std::array<double, 3> like_normal{};
+  std::array<double, 3> own_normal{};
 
   // One more source, winding like the sorted triple iff `like`, its normal `source_normal`
   // (triangle_normal, in its own winding). True when it is the first source of its winding: the
@@ -225,6 +227,7 @@ struct TripleSources {
     ++count;
     like_sorted += like;
     for (std::size_t i = 0; i < 3; ++i) normal[i] += like ? source_normal[i] : -source_normal[i];
+    for (std::size_t i = 0; i < 3; ++i) own_normal[i] += source_normal[i];
     if (like)
       for (std::size_t i = 0; i < 3; ++i) like_normal[i] += source_normal[i];
     return first;
@@ -242,7 +245,12 @@ struct TripleSources {
 // of each winding (the one of a winding without sources is not read); `record(corner)` is a
 // corner's vertex record (const float*). The one copy takes the first source's corners, a
 // pair's front copy the `like` ones and its back copy the `opposite` ones wound against the
-// front; the front is oriented by orient_kept_triangle (nothing is appended when it drops it).
+// front; the front is oriented by orient_kept_triangle (nothing is appended when it drops it):
+// the one copy to face like all its sources, each in its own winding, a pair's front like its
+// `like` sources. (Not the sum in the sorted triple's winding: where the clustering folds the
+// surface across a triple, sources of both windings face the same way, and that sum, pointing
+// against the larger winding's area, turned the copy inside out, to be drawn from behind or
+// culled among neighbours that face out; inside_out.h repairs what is left.)
 template <class Record>
 void append_kept_triangles(const TripleSources& sources, const std::array<std::uint32_t, 3>& like,
                            std::array<std::uint32_t, 3> opposite, const Record& record,
@@ -252,8 +260,8 @@ void append_kept_triangles(const TripleSources& sources, const std::array<std::u
   const bool front_like = copies == 2 || sources.first_is_like;
   std::array<std::uint32_t, 3> front = front_like ? like : opposite;
   const std::array<std::uint32_t, 3> unturned = front;
-  if (!orient_kept_triangle({record(front[0]), record(front[1]), record(front[2])}, front_like,
-                            copies == 1 ? sources.normal : sources.like_normal, front))
+  if (!orient_kept_triangle({record(front[0]), record(front[1]), record(front[2])},
+                            copies == 1 ? sources.own_normal : sources.like_normal, front))
     return;
   out.insert(out.end(), front.begin(), front.end());
   if (copies == 1) return;
