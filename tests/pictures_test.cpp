@@ -54,6 +54,25 @@ TEST(OffscreenRenderer, KeepsTheTopRowOnTop) {
   EXPECT_EQ(image->get(32, 50), view.background);
 }
 
+TEST(OffscreenRenderer, CullsTrianglesFacingAwayOnlyWhenAsked) {
+  // the quad wound clockwise as seen from +z: drawn (lit from both sides) unless culled
+  NodeMesh quad = unit_quad();
+  quad.indices = {0, 2, 1, 2, 3, 1};
+  RenderItem item{&quad, glm::vec3(1)};
+  RenderView view = looking_down_z(64, 48);
+  Result<Image> both_sides = render_offscreen(std::span(&item, 1), view);
+  ASSERT_TRUE(both_sides.ok()) << both_sides.status().message();
+  EXPECT_NE(both_sides->get(32, 24), view.background);
+  view.cull_back_faces = true;
+  Result<Image> culled = render_offscreen(std::span(&item, 1), view);
+  ASSERT_TRUE(culled.ok());
+  EXPECT_EQ(culled->get(32, 24), view.background);
+  quad = unit_quad();  // facing the camera: drawn when culling too
+  Result<Image> front = render_offscreen(std::span(&item, 1), view);
+  ASSERT_TRUE(front.ok());
+  EXPECT_NE(front->get(32, 24), view.background);
+}
+
 TEST(Png, WritesAFileThatStartsWithThePngSignature) {
   Image image(8, 4, 0x112233);
   auto path = std::filesystem::path(::testing::TempDir()) / "pictures_test.png";

@@ -111,7 +111,7 @@ int run_render(const RenderArgs& args, const CommandContext& context) {
 
   // picture
   const FramePainter painter(tree.manifest());
-  Result<Image> image = painter.paint(*frame, camera.value(), args.width, args.height);
+  Result<Image> image = painter.paint(*frame, camera.value(), args.width, args.height, args.cull_back_faces);
   if (!image.ok()) return report(image.status());
   const Status written = write_png(args.output, image.value());
   if (!written.ok()) return report(written);

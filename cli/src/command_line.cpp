@@ -289,6 +289,8 @@ void add_render_command(CLI::App& app, CommandContext& context) {
       ->capture_default_str()
       ->check(positive_finite());
   command->add_option("--budget", args->budget, "Cache budget: 8M, 512K, 1G")->capture_default_str();
+  command->add_flag("--cull-back-faces", args->cull_back_faces,
+                    "Do not draw triangles facing away from the camera, as a game does (default: both sides, lit)");
   command->callback([args, &context] { context.exit_code = run_render(*args, context); });
 }
 

@@ -77,6 +77,7 @@ struct RenderArgs {
   std::string camera;  // "ex,ey,ez,tx,ty,tz", empty: framing_camera
   double fov_degrees = 60.0;
   bool ortho = false;  // an orthographic view framing the model sphere instead of --fov's perspective
+  bool cull_back_faces = false;  // as a game draws: a triangle facing away from the camera is not drawn
   int width = 1024;
   int height = 768;
   // The runtime's default (walk's too): the framed demo rock (samples/rock_small.ply, 40K

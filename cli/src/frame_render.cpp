@@ -21,7 +21,7 @@ std::uint32_t FramePainter::detail_level(const runtime::DrawItem& draw) const {
 }
 
 Result<Image> FramePainter::paint(const runtime::FrameResult& frame, const runtime::Camera& camera, int width,
-                                  int height) const {
+                                  int height, bool cull_back_faces) const {
   std::vector<RenderItem> items;
   items.reserve(frame.draws.size());
   for (const runtime::DrawItem& draw : frame.draws)
@@ -31,6 +31,7 @@ Result<Image> FramePainter::paint(const runtime::FrameResult& frame, const runti
   view.projection = camera.projection;
   view.width = width;
   view.height = height;
+  view.cull_back_faces = cull_back_faces;
   return render_offscreen(items, view);
 }
 

@@ -26,11 +26,11 @@ class FramePainter {
   // step coarser. This is the level a picture's tint encodes.
   std::uint32_t detail_level(const runtime::DrawItem& draw) const;
 
-  // Renders `frame.draws` as seen by `camera` into a width x height picture (pixels). The camera's
-  // projection should have aspect width / height. Fails (ErrorCode::unsupported) only when no
-  // OpenGL context can be created.
-  Result<Image> paint(const runtime::FrameResult& frame, const runtime::Camera& camera, int width,
-                      int height) const;
+  // Renders `frame.draws` as seen by `camera` into a width x height picture (pixels), back faces
+  // culled when `cull_back_faces` (RenderView). The camera's projection should have aspect width /
+  // height. Fails (ErrorCode::unsupported) only when no OpenGL context can be created.
+  Result<Image> paint(const runtime::FrameResult& frame, const runtime::Camera& camera, int width, int height,
+                      bool cull_back_faces = false) const;
 
  private:
   std::vector<std::uint32_t> height_;  // per manifest node

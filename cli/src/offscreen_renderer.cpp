@@ -31,6 +31,7 @@ struct OsMesa {
   decltype(&::glClearColor) ClearColor = nullptr;
   decltype(&::glClear) Clear = nullptr;
   decltype(&::glEnable) Enable = nullptr;
+  decltype(&::glCullFace) CullFace = nullptr;
   decltype(&::glMatrixMode) MatrixMode = nullptr;
   decltype(&::glLoadMatrixf) LoadMatrixf = nullptr;
   decltype(&::glLoadIdentity) LoadIdentity = nullptr;
@@ -69,6 +70,7 @@ OsMesa load_osmesa() {
   resolve(library, "glClearColor", api.ClearColor, e);
   resolve(library, "glClear", api.Clear, e);
   resolve(library, "glEnable", api.Enable, e);
+  resolve(library, "glCullFace", api.CullFace, e);
   resolve(library, "glMatrixMode", api.MatrixMode, e);
   resolve(library, "glLoadMatrixf", api.LoadMatrixf, e);
   resolve(library, "glLoadIdentity", api.LoadIdentity, e);
@@ -152,6 +154,10 @@ Result<Image> render_offscreen(std::span<const RenderItem> items, const RenderVi
   gl.ClearColor(channel(view.background, 16), channel(view.background, 8), channel(view.background, 0), 1);
   gl.Clear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
   gl.Enable(GL_DEPTH_TEST);
+  if (view.cull_back_faces) {
+    gl.CullFace(GL_BACK);
+    gl.Enable(GL_CULL_FACE);
+  }
   gl.MatrixMode(GL_PROJECTION);
   gl.LoadMatrixf(glm::value_ptr(view.projection));
   gl.MatrixMode(GL_MODELVIEW);

@@ -26,6 +26,10 @@ struct RenderView {
   int width = 1024;            // pixels
   int height = 768;
   std::uint32_t background = 0x20242c;  // 0xRRGGBB
+  // Cull triangles wound clockwise on screen, as a game's renderer does: a triangle facing away
+  // from its neighbours shows as a hole. Otherwise both sides are drawn and lit (two-sided
+  // lighting), such a triangle as a dark patch.
+  bool cull_back_faces = false;
 };
 
 // Returns io_error-class `unsupported` if no OpenGL context can be created.
