@@ -142,6 +142,13 @@ CliRun octolod(const std::string& arguments, const std::filesystem::path& dir) {
   return run;
 }
 
+// A 20K-triangle rock (`seed`) sampled into dir/rock.ply and baked into dir/rock at 64M.
+bool bake_rock(const std::filesystem::path& dir, int seed = 1) {
+  const std::string ply = (dir / "rock.ply").string();
+  return octolod("sample --shape rock --triangles 20000 --seed " + std::to_string(seed) + " -o " + ply, dir).exit_code == 0 &&
+         octolod("bake " + ply + " -o " + (dir / "rock").string() + " --memory 64M", dir).exit_code == 0;
+}
+
 class RenderCli : public ::testing::Test {
  protected:
   void SetUp() override {
@@ -209,10 +216,7 @@ TEST_F(RenderCli, SyntheticTreeShowsOneTintPerDetailLevelAndNoOther) {
 
 TEST_F(RenderCli, BakedRockIsDrawnAndEveryDrawnTriangleIsCounted) {
   const auto dir = scratch_dir("rock");
-  ASSERT_EQ(octolod("sample --shape rock --triangles 20000 -o " + (dir / "rock.ply").string(), dir).exit_code, 0);
-  ASSERT_EQ(octolod("bake " + (dir / "rock.ply").string() + " -o " + (dir / "rock").string() + " --memory 64M", dir)
-                .exit_code,
-            0);
+  ASSERT_TRUE(bake_rock(dir));
   const auto png = dir / "rock.png";
   const CliRun run = octolod("--json render " + (dir / "rock").string() + " --width 320 --height 240 -o " + png.string(), dir);
   ASSERT_EQ(run.exit_code, 0);
@@ -242,10 +246,7 @@ TEST_F(RenderCli, CullingBackFacesOpensNoTriangleSizedHole) {
   // inside out among its neighbours there, 13 pixels of background at 320 x 240; what is left
   // are 1-pixel lines where a simplified fold crosses itself (2 pixels).
   const auto dir = scratch_dir("culled");
-  ASSERT_EQ(octolod("sample --shape rock --triangles 20000 --seed 2 -o " + (dir / "rock.ply").string(), dir).exit_code, 0);
-  ASSERT_EQ(octolod("bake " + (dir / "rock.ply").string() + " -o " + (dir / "rock").string() + " --memory 64M", dir)
-                .exit_code,
-            0);
+  ASSERT_TRUE(bake_rock(dir, 2));
   const std::string render = "render " + (dir / "rock").string() + " --width 320 --height 240 -o ";
   ASSERT_EQ(octolod(render + (dir / "both.png").string(), dir).exit_code, 0);
   ASSERT_EQ(octolod(render + (dir / "culled.png").string() + " --cull-back-faces", dir).exit_code, 0);
@@ -309,8 +310,7 @@ TEST_F(RenderCli, DemoPictureShowsAtLeastTwoDetailTints) {
 TEST_F(RenderCli, ComparePicturesColourTheCutsAndTheInputByTheirDistances) {
   const auto dir = scratch_dir("compare");
   const auto ply = dir / "rock.ply";
-  ASSERT_EQ(octolod("sample --shape rock --triangles 20000 -o " + ply.string(), dir).exit_code, 0);
-  ASSERT_EQ(octolod("bake " + ply.string() + " -o " + (dir / "rock").string() + " --memory 64M", dir).exit_code, 0);
+  ASSERT_TRUE(bake_rock(dir));
 
   const CliRun finest = octolod("--json compare " + ply.string() + " " + (dir / "rock").string() +
                                     " --errors 0 --no-reference --pictures " + (dir / "finest").string(),
