@@ -11,14 +11,11 @@
 #include <vector>
 
 #include "boundary_edges.h"
+#include "point_triangle.h"
 #include "wedges.h"
 
 namespace octolod::bake {
 namespace {
-
-double dot3(const std::array<double, 3>& a, const std::array<double, 3>& b) {
-  return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-}
 
 struct OutEdge {
   std::uint32_t to;        // position id of its second end
@@ -41,7 +38,7 @@ std::size_t rewind_inside_out(NodeMesh& mesh) {
       std::array<double, 3> corners{0.0, 0.0, 0.0};
       for (std::size_t k = 0; k < 3; ++k)
         for (std::size_t i = 0; i < 3; ++i) corners[i] += record_of(3 * t + k)[VertexLayout::normal_offset() + i];
-      if (dot3(normal_of(t), corners) >= 0.0) continue;
+      if (dot(normal_of(t), corners) >= 0.0) continue;
     }
     suspects.push_back(static_cast<std::uint32_t>(t));
   }
@@ -87,7 +84,7 @@ std::size_t rewind_inside_out(NodeMesh& mesh) {
       shared += alike + opposite > 0;
       alike_only = alike_only && opposite == 0;
     }
-    if (shared < 2 || dot3(normal[t], neighbours) >= 0.0 || !(mesh.layout.normal || alike_only)) continue;
+    if (shared < 2 || dot(normal[t], neighbours) >= 0.0 || !(mesh.layout.normal || alike_only)) continue;
     // A two-sided sheet's twin (the same corners wound the other way) is left as it is: re-wound,
     // it would repeat the other copy, which the next step drops (a repeated face), and the
     // boundary mod 2 would change.

@@ -235,8 +235,7 @@ bool orient_kept_triangle(const std::array<const float*, 3>& record, const std::
       std::memcmp(record[0], record[2], 12) == 0)
     return false;
   const std::array<double, 3> normal = triangle_normal(record[0], record[1], record[2]);
-  const double agreement = normal[0] * facing[0] + normal[1] * facing[1] + normal[2] * facing[2];
-  if (agreement < 0.0) std::swap(corner[1], corner[2]);
+  if (dot(normal, facing) < 0.0) std::swap(corner[1], corner[2]);
   return true;
 }
 
