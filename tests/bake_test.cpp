@@ -31,6 +31,8 @@
 #include "octolod/formats/node_file.h"
 #include "octolod/formats/ply_writer.h"
 #include "octolod/samplegen/sample_generator.h"
+#include "octolod/formats/ply_reader.h"
+#include "ply_test_helpers.h"
 #include "record_file.h"
 
 namespace octolod::bake {
@@ -451,6 +453,41 @@ TEST_F(BakeTest, TinyBudgetOutOfCoreGivesTheSameTreeAsALargeBudget) {
             manifest_to_json(without_run_details(ml)));
   EXPECT_EQ(manifest_to_json(without_run_details(written_manifest(path("records"), rr.value()))),
             manifest_to_json(without_run_details(ml)));
+}
+
+// A textured scan's PLY has its UVs per face corner (texcoord) and one vertex per position:
+// the same rock written that way (test::write_corner_uv_ply, its UV seams welded) bakes out of
+// core into the node files its vertex-per-wedge PLY gives in memory (the in-memory octree).
+TEST_F(BakeTest, CornerUvsBakeIntoTheSameTreeAsWedges) {
+  auto mesh = read_ply(small_ply());
+  ASSERT_TRUE(mesh.ok()) << mesh.status().message();
+  test::write_corner_uv_ply(path("corners.ply"), mesh->info.layout, mesh->vertices, mesh->triangles);
+  BakeOptions wedges = options("wedges");
+  wedges.memory_budget_bytes = 256 << 20;
+  wedges.max_tris = 60;
+  BakeOptions corners = options("corners");
+  corners.input = path("corners.ply");
+  corners.memory_budget_bytes = 2 << 20;
+  corners.force_out_of_core = true;
+  corners.max_tris = 60;
+  auto rw = bake(wedges);
+  ASSERT_TRUE(rw.ok()) << rw.status().message();
+  auto rc = bake(corners);
+  ASSERT_TRUE(rc.ok()) << rc.status().message();
+  EXPECT_TRUE(rw->octree_in_memory);
+  EXPECT_FALSE(rc->soup_in_core);
+  EXPECT_LT(rc->header.input_vertices, rw->header.input_vertices);  // the seams' copies welded
+  EXPECT_EQ(rc->header.layout, rw->header.layout);
+  auto a = tree_files(path("wedges"));
+  auto b = tree_files(path("corners"));
+  a.erase("manifest.json");
+  b.erase("manifest.json");
+  EXPECT_GT(a.size(), 20u);
+  EXPECT_TRUE(a == b);
+  Manifest mc = without_run_details(written_manifest(path("corners"), rc.value()));
+  mc.parameters.input = wedges.input.string();
+  mc.input_vertices = rw->header.input_vertices;
+  EXPECT_EQ(manifest_to_json(mc), manifest_to_json(without_run_details(written_manifest(path("wedges"), rw.value()))));
 }
 
 TEST_F(BakeTest, ASecondBakeReplacesTheFirstAtomically) {

@@ -29,6 +29,13 @@ std::string ascii_mesh(const std::string& vertices, const std::string& faces) {
   return std::string("ply\nformat ascii 1.0\nelement vertex 3\n") + kXyz + kFaces +
          "end_header\n" + vertices + faces;
 }
+// The same with `texcoord` after the indices: header lines 1-10, body lines start at 11 (the
+// face's line is 14).
+std::string ascii_uv_mesh(const std::string& faces, const std::string& texcoord_type = "float") {
+  return std::string("ply\nformat ascii 1.0\nelement vertex 3\n") + kXyz + kFaces +
+         "property list uchar " + texcoord_type + " texcoord\nend_header\n" +
+         "0.000 0.000 0.000\n1.000 0.000 0.000\n0.000 1.000 0.000\n" + faces;
+}
 constexpr std::size_t kOneMiB = std::size_t{1} << 20;
 const std::string kGoodVertices = "0.000 0.000 0.000\n1.000 0.000 0.000\n0.000 1.000 0.000\n";
 
@@ -143,6 +150,16 @@ std::vector<MalformedCase> malformed_cases() {
        std::string("ply\nformat ascii 1.0\nelement vertex 0\n") + kXyz +
            "element extra 1\nproperty list int float data\nend_header\n-1 0 0 0\n",
        ErrorCode::bad_input, "line 10", "negative count -1 for list 'data'"},
+      {"TexcoordCountNotTwoPerCorner", ascii_uv_mesh("3 0 1 2 4 0 0 1 0\n"), ErrorCode::bad_input, "line 14",
+       "face 0 has 4 texture coordinates for 3 vertices (texcoord holds u and v for every corner)"},
+      {"TexcoordNaN", ascii_uv_mesh("3 0 1 2 6 0 0 1 nan 0 1\n"), ErrorCode::bad_input, "line 14",
+       "face 0 has a texture coordinate of NaN"},
+      {"TexcoordBeyond1e18", ascii_uv_mesh("3 0 1 2 6 0 0 1 3e18 0 1\n"), ErrorCode::bad_input, "line 14",
+       "face 0 has a texture coordinate of 3e+18, beyond ±1e18"},
+      {"TexcoordIntegers", ascii_uv_mesh("3 0 1 2 6 0 0 1 0 0 1\n", "int"), ErrorCode::bad_input, "line 7",
+       "face property 'texcoord' is not a list of floats"},
+      {"TexcoordIndexOutOfRange", ascii_uv_mesh("3 0 1 3 6 0 0 1 0 0 1\n"), ErrorCode::bad_input, "line 14",
+       "face 0 has vertex index 3, out of range (the file has 3 vertices)"},
       {"AsciiOverlongValue", ascii_mesh(std::string(2000, '1') + " 0 0\n" + kGoodVertices, ""),
        ErrorCode::bad_input, "line 10", "value longer than 1024 characters in vertex 0 of 3"},
   };
@@ -343,55 +360,68 @@ TEST(PlyMalformed, MissingFileIsAnIoError) {
 
 // A small mesh with quads (so the size check, which assumes triangles, lets many truncated
 // files through to the streaming decoder), read back after cutting it at every byte length.
+// Also with corner UVs (a texcoord list after each quad's indices), which are read whole per face.
 TEST(PlyTruncation, EveryLengthFailsCleanly) {
   ScratchDir dir;
   const VertexLayout layout{true, true, true};
   const test::TestMesh strip = test::strip_mesh(layout, true, 40);
   constexpr PlyFormat kFormats[] = {PlyFormat::binary_little_endian,
                                     PlyFormat::binary_big_endian, PlyFormat::ascii};
-  for (PlyFormat format : kFormats) {
-    SCOPED_TRACE(std::string(to_string(format)));
-    const bool big = format == PlyFormat::binary_big_endian;
-    // Write the vertices with PlyWriter, then replace the face element with 100 quads.
-    const auto source = dir.file("source.ply");
-    ASSERT_TRUE(write_ply(source, {format, layout, PlyColorType::uchar, {}, {}}, strip.vertices, {}).ok());
-    std::string bytes = test::read_bytes(source);
-    const std::string old_faces = "element face 0\n";
-    bytes.replace(bytes.find(old_faces), old_faces.size(), "element face 100\n");
-    for (std::int32_t q = 0; q < 100; ++q) {
-      const std::int32_t a = q % 37;
-      if (format == PlyFormat::ascii) {
-        bytes += "4 " + std::to_string(a) + " " + std::to_string(a + 1) + " " +
-                 std::to_string(a + 2) + " " + std::to_string(a + 3) + "\n";
-      } else {
-        bytes += '\x04';
-        for (std::int32_t k = 0; k < 4; ++k) append_scalar(bytes, a + k, big);
+  for (const bool corner_uvs : {false, true}) {
+    for (PlyFormat format : kFormats) {
+      SCOPED_TRACE(std::string(to_string(format)) + (corner_uvs ? " corner uvs" : ""));
+      const bool big = format == PlyFormat::binary_big_endian;
+      // Write the vertices with PlyWriter, then replace the face element with 100 quads.
+      const auto source = dir.file("source.ply");
+      ASSERT_TRUE(write_ply(source, {format, layout, PlyColorType::uchar, {}, {}}, strip.vertices, {}).ok());
+      std::string bytes = test::read_bytes(source);
+      const std::string old_faces = "element face 0\n";
+      bytes.replace(bytes.find(old_faces), old_faces.size(), "element face 100\n");
+      if (corner_uvs) {
+        const std::string indices = "property list uchar int vertex_indices\n";
+        bytes.insert(bytes.find(indices) + indices.size(), "property list uchar float texcoord\n");
       }
-    }
-    const auto path = dir.file("whole.ply");
-    write_bytes(path, bytes);
-    auto whole = read_ply(path);
-    ASSERT_TRUE(whole.ok()) << whole.status().message();
-    ASSERT_EQ(whole->triangles.size(), 600u);
+      for (std::int32_t q = 0; q < 100; ++q) {
+        const std::int32_t a = q % 37;
+        if (format == PlyFormat::ascii) {
+          bytes += "4 " + std::to_string(a) + " " + std::to_string(a + 1) + " " +
+                   std::to_string(a + 2) + " " + std::to_string(a + 3);
+          if (corner_uvs) bytes += " 8 0.5 0.25 1 0.25 1 1 0.5 " + std::to_string(q);
+          bytes += "\n";
+        } else {
+          bytes += '\x04';
+          for (std::int32_t k = 0; k < 4; ++k) append_scalar(bytes, a + k, big);
+          if (corner_uvs) {
+            bytes += '\x08';
+            for (std::int32_t k = 0; k < 8; ++k) append_scalar(bytes, static_cast<float>(q + k) * 0.125f, big);
+          }
+        }
+      }
+      const auto path = dir.file("whole.ply");
+      write_bytes(path, bytes);
+      auto whole = read_ply(path);
+      ASSERT_TRUE(whole.ok()) << whole.status().message();
+      ASSERT_EQ(whole->triangles.size(), 600u);
 
-    // An ascii file cut inside its last value (or its final newline) is still a valid file.
-    const std::size_t last_value = bytes.find_last_of(' ') + 1;
-    const auto cut = dir.file("cut.ply");
-    for (std::size_t length = 0; length < bytes.size(); ++length) {
-      write_bytes(cut, std::string_view(bytes).substr(0, length));
-      auto reader = PlyReader::open(cut, test::small_batches());
-      Status status = status_of(reader);
-      while (status.ok()) {
-        auto batch = reader.value()->next();
-        status = status_of(batch);
-        if (status.ok() && batch->kind == PlyBatch::Kind::end) break;
+      // An ascii file cut inside its last value (or its final newline) is still a valid file.
+      const std::size_t last_value = bytes.find_last_of(' ') + 1;
+      const auto cut = dir.file("cut.ply");
+      for (std::size_t length = 0; length < bytes.size(); ++length) {
+        write_bytes(cut, std::string_view(bytes).substr(0, length));
+        auto reader = PlyReader::open(cut, test::small_batches());
+        Status status = status_of(reader);
+        while (status.ok()) {
+          auto batch = reader.value()->next();
+          status = status_of(batch);
+          if (status.ok() && batch->kind == PlyBatch::Kind::end) break;
+        }
+        if (format == PlyFormat::ascii && length > last_value) {
+          EXPECT_TRUE(status.ok()) << length << ": " << status.message();
+          continue;
+        }
+        ASSERT_TRUE(is_error(status, ErrorCode::bad_input, {cut.string() + ": "}))
+            << "cut at " << length << " of " << bytes.size();
       }
-      if (format == PlyFormat::ascii && length > last_value) {
-        EXPECT_TRUE(status.ok()) << length << ": " << status.message();
-        continue;
-      }
-      ASSERT_TRUE(is_error(status, ErrorCode::bad_input, {cut.string() + ": "}))
-          << "cut at " << length << " of " << bytes.size();
     }
   }
 }

@@ -226,6 +226,113 @@ TEST(PlyReader, FacesBeforeVerticesAndPolygonsFanTriangulated) {
   EXPECT_EQ(mesh.vertices, (std::vector<float>{0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0, 2, 0, 0}));
 }
 
+// ---- texture coordinates per face corner (texcoord) ----
+
+// Every triangle batch and its corner UVs, read in the smallest batches.
+struct CornerUvStream {
+  std::vector<std::uint32_t> triangles;
+  std::vector<float> uvs;
+  int batches = 0;
+};
+CornerUvStream stream_corner_uvs(const std::filesystem::path& path) {
+  CornerUvStream out;
+  auto reader = PlyReader::open(path, test::small_batches());
+  EXPECT_TRUE(reader.ok()) << reader.status().message();
+  if (!reader.ok()) return out;
+  EXPECT_TRUE(reader.value()->info().corner_uvs);
+  EXPECT_TRUE(reader.value()->info().layout.uv);
+  for (;;) {
+    auto batch = reader.value()->next();
+    EXPECT_TRUE(batch.ok()) << batch.status().message();
+    if (!batch.ok() || batch->kind == PlyBatch::Kind::end) break;
+    if (batch->kind != PlyBatch::Kind::triangles) continue;
+    EXPECT_EQ(batch->first, out.triangles.size() / 3);
+    EXPECT_EQ(batch->corner_uvs.size(), 2 * batch->triangles.size());
+    out.triangles.insert(out.triangles.end(), batch->triangles.begin(), batch->triangles.end());
+    out.uvs.insert(out.uvs.end(), batch->corner_uvs.begin(), batch->corner_uvs.end());
+    ++out.batches;
+  }
+  return out;
+}
+
+//   3---2      quad 0 1 2 3 (its texcoord before its indices) -> (0 1 2) (0 2 3)
+//   |   |      triangle 1 4 2, whose corner at 2 has another (u, v): a seam
+//   0---1  4
+TEST(PlyReader, CornerUvsComeWithTheirTrianglesAndReadPlyMakesWedges) {
+  ScratchDir dir;
+  const auto path = dir.file("corner_uvs.ply");
+  write_bytes(path,
+              "ply\nformat ascii 1.0\ncomment TextureFile stone.png\n"
+              "element vertex 5\nproperty float x\nproperty float y\nproperty float z\n"
+              "element face 2\nproperty list uchar float texcoord\nproperty uchar flags\n"
+              "property list uchar int vertex_indices\nend_header\n"
+              "0 0 0\n1 0 0\n1 1 0\n0 1 0\n2 0 0\n"
+              "8 0 0 1 0 1 1 0 1 7 4 0 1 2 3\n6 1 0 0.5 0 0.9 1 7 3 1 4 2\n");
+  const CornerUvStream stream = stream_corner_uvs(path);
+  EXPECT_EQ(stream.triangles, (std::vector<std::uint32_t>{0, 1, 2, 0, 2, 3, 1, 4, 2}));
+  EXPECT_EQ(stream.uvs, (std::vector<float>{0, 0, 1, 0, 1, 1, 0, 0, 1, 1, 0, 1, 1, 0, 0.5f, 0, 0.9f, 1}));
+
+  // one vertex per (vertex, u, v) in first use order: vertex 2 twice, once per side of the seam
+  const PlyMesh mesh = read_ok(path);
+  EXPECT_TRUE(mesh.info.corner_uvs);
+  EXPECT_EQ(mesh.info.layout, (VertexLayout{.uv = true}));
+  EXPECT_EQ(mesh.triangles, (std::vector<std::uint32_t>{0, 1, 2, 0, 2, 3, 1, 4, 5}));
+  EXPECT_EQ(mesh.vertices, (std::vector<float>{0, 0, 0, 0, 0, 1, 0, 0, 1, 0, 1, 1, 0, 1, 1, 0, 1, 0, 0, 1,
+                                               2, 0, 0, 0.5f, 0, 1, 1, 0, 0.9f, 1}));
+}
+
+// A 2000-sided polygon with corner UVs fans out over several batches, each triangle with its
+// corners' (u, v), in every format.
+TEST(PlyReader, CornerUvsOfAHugePolygonSpanBatches) {
+  ScratchDir dir;
+  constexpr std::uint32_t kSides = 2000;
+  for (PlyFormat format : kFormats) {
+    SCOPED_TRACE(std::string(to_string(format)));
+    const bool binary = format != PlyFormat::ascii;
+    const bool big = format == PlyFormat::binary_big_endian;
+    std::string text = "ply\nformat " + std::string(to_string(format)) + " 1.0\nelement vertex " +
+                       std::to_string(kSides) + "\nproperty float x\nproperty float y\nproperty float z\n"
+                       "element face 1\nproperty list ushort uint vertex_indices\n"
+                       "property list ushort double texcoord\nend_header\n";
+    for (std::uint32_t i = 0; i < kSides; ++i) {
+      if (binary) {
+        for (std::uint32_t k = 0; k < 3; ++k) append_scalar(text, static_cast<float>(i + k), big);
+      } else {
+        text += std::to_string(i) + " " + std::to_string(i + 1) + " " + std::to_string(i + 2) + "\n";
+      }
+    }
+    if (binary) {
+      append_scalar(text, static_cast<std::uint16_t>(kSides), big);
+      for (std::uint32_t i = 0; i < kSides; ++i) append_scalar(text, (i * 7) % kSides, big);
+      append_scalar(text, static_cast<std::uint16_t>(2 * kSides), big);
+      for (std::uint32_t i = 0; i < kSides; ++i) {
+        append_scalar(text, static_cast<double>(i), big);
+        append_scalar(text, -0.5 * i, big);
+      }
+    } else {
+      text += std::to_string(kSides);
+      for (std::uint32_t i = 0; i < kSides; ++i) text += " " + std::to_string((i * 7) % kSides);
+      text += " " + std::to_string(2 * kSides);
+      for (std::uint32_t i = 0; i < kSides; ++i) text += " " + std::to_string(i) + " " + std::to_string(-0.5 * i);
+      text += "\n";
+    }
+    const auto path = dir.file("polygon.ply");
+    write_bytes(path, text);
+    const CornerUvStream stream = stream_corner_uvs(path);
+    EXPECT_EQ(stream.batches, (1998 + 340) / 341);
+    ASSERT_EQ(stream.triangles.size(), 3u * 1998);
+    ASSERT_EQ(stream.uvs.size(), 6u * 1998);
+    for (std::uint32_t t = 0; t < 1998; ++t) {
+      const std::uint32_t corners[3] = {0, t + 1, t + 2};
+      for (std::uint32_t c = 0; c < 3; ++c) {
+        ASSERT_EQ(stream.triangles[3 * t + c], (corners[c] * 7) % kSides) << t;
+        ASSERT_EQ(stream.uvs[6 * t + 2 * c], static_cast<float>(corners[c])) << t;
+        ASSERT_EQ(stream.uvs[6 * t + 2 * c + 1], static_cast<float>(-0.5 * corners[c])) << t;
+      }
+    }
+  }
+}
+
 TEST(PlyReader, SkipsUnknownElementsAndPropertiesIncludingLists) {
   ScratchDir dir;
   for (PlyFormat format : kFormats) {

@@ -13,6 +13,7 @@
 #include <fstream>
 #include <initializer_list>
 #include <limits>
+#include <map>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -122,6 +123,43 @@ inline TestMesh strip_mesh(VertexLayout layout, bool byte_colors, std::uint32_t 
       mesh.triangles.insert(mesh.triangles.end(), {i + 1, i, i + 2});
   }
   return mesh;
+}
+
+// The mesh (VertexLayout floats with uv, `triangles` 3 per triangle) as a binary little-endian
+// PLY whose faces carry the texture coordinates (a `texcoord` list per face after its indices,
+// as MeshLab writes textured meshes) and whose vertices do not: vertices equal but for u, v are
+// written once, so a UV seam's two sides share one vertex. Colours as floats (exact).
+inline void write_corner_uv_ply(const std::filesystem::path& path, VertexLayout layout,
+                                const std::vector<float>& vertices,
+                                const std::vector<std::uint32_t>& triangles) {
+  ASSERT_TRUE(layout.uv);
+  const std::size_t floats = layout.floats(), kept = layout.uv_offset();
+  std::map<std::vector<float>, std::uint32_t> welded;
+  std::vector<std::uint32_t> id(vertices.size() / floats);
+  std::string vertex_bytes;
+  for (std::size_t v = 0; v < id.size(); ++v) {
+    std::vector<float> key(vertices.begin() + static_cast<std::ptrdiff_t>(v * floats),
+                           vertices.begin() + static_cast<std::ptrdiff_t>(v * floats + kept));
+    const auto [it, added] = welded.try_emplace(key, static_cast<std::uint32_t>(welded.size()));
+    if (added)
+      for (float f : key) append_scalar(vertex_bytes, f, false);
+    id[v] = it->second;
+  }
+  std::string text = "ply\nformat binary_little_endian 1.0\ncomment TextureFile rock.png\nelement vertex " +
+                     std::to_string(welded.size()) + "\nproperty float x\nproperty float y\nproperty float z\n";
+  if (layout.normal) text += "property float nx\nproperty float ny\nproperty float nz\n";
+  if (layout.color) text += "property float red\nproperty float green\nproperty float blue\n";
+  text += "element face " + std::to_string(triangles.size() / 3) +
+          "\nproperty list uchar int vertex_indices\nproperty list uchar float texcoord\nend_header\n";
+  text += vertex_bytes;
+  for (std::size_t t = 0; t < triangles.size(); t += 3) {
+    append_scalar(text, std::uint8_t{3}, false);
+    for (std::size_t c = 0; c < 3; ++c) append_scalar(text, static_cast<std::int32_t>(id[triangles[t + c]]), false);
+    append_scalar(text, std::uint8_t{6}, false);
+    for (std::size_t c = 0; c < 3; ++c)
+      for (std::size_t k = 0; k < 2; ++k) append_scalar(text, vertices[triangles[t + c] * floats + kept + k], false);
+  }
+  write_bytes(path, text);
 }
 
 // Bit-exact float comparison (so -0.0 != 0.0 and NaN patterns matter).

@@ -21,6 +21,7 @@
 #include "octolod/bake/soup.h"
 #include "octolod/formats/ply_reader.h"
 #include "octolod/formats/ply_writer.h"
+#include "ply_test_helpers.h"
 #include "record_file.h"
 #include "split.h"
 
@@ -434,6 +435,64 @@ TEST(Soup, FacesBeforeVerticesGiveTheSameSoup) {
     EXPECT_FALSE(r->mesh_consumed);
     EXPECT_EQ(r->triangle_count, 4u);
     EXPECT_TRUE(read_bytes(r->soup.path()) == expected);
+  }
+}
+
+// Corner UVs (a texcoord list per face, vertices without u, v: test::write_corner_uv_ply) give
+// the soup of the same mesh with a vertex per wedge, on every path and in every order, with or
+// without a sink; a mesh sink is never offered a mesh whose UVs are per corner. The mesh has a
+// seam: the right half's triangles use copies of their vertices with u + 1, which the corner-UV
+// file welds back to one vertex each.
+TEST(Soup, CornerUvsGiveTheSoupOfTheirWedges) {
+  WorkDir dir;
+  GridMesh mesh = make_grid(100, 60);
+  const std::size_t floats = mesh.layout.floats();
+  const auto n = static_cast<std::uint32_t>(mesh.vertices.size() / floats);
+  for (std::uint32_t v = 0; v < n; ++v) {
+    mesh.vertices.insert(mesh.vertices.end(), mesh.vertices.begin() + v * floats,
+                         mesh.vertices.begin() + (v + 1) * floats);
+    mesh.vertices[mesh.vertices.size() - 2] += 1.0f;
+  }
+  for (std::size_t t = 0; t + 3 < mesh.triangles.size(); t += 3)  // the degenerate one stays
+    if (mesh.vertices[mesh.triangles[t] * floats] >= 50.0f)
+      for (std::size_t c = 0; c < 3; ++c) mesh.triangles[t + c] += n;
+  test::write_corner_uv_ply(dir.file("corner.ply"), mesh.layout, mesh.vertices, mesh.triangles);
+  const std::string expected =
+      as_string(dereference_in_memory(mesh.vertices, mesh.triangles, mesh.layout));
+  for (const SoupOrder order : {SoupOrder::any, SoupOrder::by_triangle}) {
+    for (const std::uint64_t budget : {kMinSoupBudget, std::uint64_t{1} << 20}) {
+      for (const bool force : {false, true}) {
+        for (const bool sink : {false, true}) {
+          if (sink && budget == kMinSoupBudget) continue;  // the sink's path is the file's
+          const auto where = ::testing::Message() << "any " << (order == SoupOrder::any) << " budget "
+                                                  << budget << " force " << force << " sink " << sink;
+          SoupOptions options = options_in(dir, budget);
+          options.order = order;
+          options.force_out_of_core = force;
+          std::string received;
+          if (sink) {
+            options.sink = [&](std::span<const std::byte> records) {
+              received.append(reinterpret_cast<const char*>(records.data()), records.size());
+              return Status{};
+            };
+          }
+          options.mesh_sink.accepts = [](VertexLayout, std::uint64_t, std::uint64_t) { return true; };
+          options.mesh_sink.consume = [](const SoupMesh&) {
+            ADD_FAILURE() << "mesh sink called for corner UVs";
+            return Status{};
+          };
+          auto r = build_soup(dir.file("corner.ply"), options);
+          ASSERT_TRUE(r.ok()) << r.status().message() << where;
+          EXPECT_EQ(r->layout, mesh.layout) << where;
+          EXPECT_EQ(r->in_core, !force && budget > kMinSoupBudget) << where;
+          EXPECT_EQ(r->vertex_count, n) << where;  // the copies welded back
+          const std::string soup = sink ? received : read_bytes(r->soup.path());
+          // corner UVs are patched in in triangle order, whatever order was asked for
+          EXPECT_TRUE(soup == expected) << where;
+        }
+        EXPECT_EQ(dir.work_file_count(), 0u);
+      }
+    }
   }
 }
 

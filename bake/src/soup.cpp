@@ -114,6 +114,51 @@ class ProgressOutput final : public RecordOutput {
   std::uint64_t done_ = 0;
 };
 
+// Soup records in triangle order get each corner's (u, v) from the corner UV file the split
+// wrote (PlyInfo::corner_uvs: 6 floats per triangle, triangle order) on their way to `inner`.
+class CornerUvOutput final : public RecordOutput {
+ public:
+  CornerUvOutput(RecordOutput& inner, VertexLayout layout, RecordReader uvs)
+      : inner_(inner), layout_(layout), uvs_(std::move(uvs)) {}
+  Result<std::span<std::byte>> reserve(std::size_t max_records) override {
+    auto space = inner_.reserve(max_records);
+    if (space.ok()) reserved_ = space.value();
+    return space;
+  }
+  Status commit(std::size_t records) override {
+    const std::size_t record_bytes = soup_record_bytes(layout_);
+    const std::size_t uv_bytes = layout_.uv_offset() * sizeof(float);
+    for (std::size_t done = 0; done < records;) {
+      auto block = uvs_.read(records - done);
+      if (!block.ok()) return block.status();
+      if (block->empty())
+        return io_error("corner UV file '" + uvs_.path().string() + "' ended before the soup");
+      const std::size_t n = block->size() / kCornerUvBytes;
+      for (std::size_t i = 0; i < n; ++i, ++next_) {
+        std::byte* record = reserved_.data() + (done + i) * record_bytes;
+        if (load_soup_triangle_id(record, layout_) != TriangleId{next_})
+          return io_error("corner UV file '" + uvs_.path().string() + "' is out of step with the soup at triangle " +
+                          std::to_string(next_));
+        for (int c = 0; c < 3; ++c)
+          std::memcpy(record + soup_corner_offset(layout_, c) + uv_bytes,
+                      block->data() + i * kCornerUvBytes + static_cast<std::size_t>(c) * 2 * sizeof(float),
+                      2 * sizeof(float));
+      }
+      done += n;
+    }
+    return inner_.commit(records);
+  }
+
+  static constexpr std::size_t kCornerUvBytes = 6 * sizeof(float);
+
+ private:
+  RecordOutput& inner_;
+  VertexLayout layout_;
+  RecordReader uvs_;
+  std::span<std::byte> reserved_;
+  std::uint32_t next_ = 0;  // triangle id of the next record
+};
+
 class SoupBuilder {
  public:
   SoupBuilder(const SoupOptions& options, std::size_t io_bytes)
@@ -126,11 +171,13 @@ class SoupBuilder {
     layout_ = info.layout;
     split_total_ = info.vertex_count + info.face_count;
     face_count_ = info.face_count;
+    corner_uvs_ = info.corner_uvs;
     const std::uint64_t vertex_array_bytes = info.vertex_count * layout_.bytes();
     const bool in_core =
         !options_.force_out_of_core && vertex_array_bytes <= options_.memory_budget_bytes / 2;
     Status status;
-    if (in_core && options_.mesh_sink.consume &&
+    // an indexed mesh has one u, v per vertex: corner UVs take the records path
+    if (in_core && !corner_uvs_ && options_.mesh_sink.consume &&
         options_.mesh_sink.accepts(layout_, info.vertex_count, info.face_count)) {
       bool fanned_out = false;
       status = run_mesh(info.vertex_count, info.face_count, fanned_out);
@@ -199,8 +246,19 @@ class SoupBuilder {
   Status split(SplitSinks sinks, const RecordSorter* sorter) {
     const auto start = std::chrono::steady_clock::now();
     sinks.progress = [this](std::uint64_t done) { progress("split", done, split_total_); };
+    std::optional<RecordWriter> uv_writer;
+    if (corner_uvs_) {
+      corner_uv_file_ = make_temp_file(options_.work_dir, "corner-uvs");
+      auto writer = RecordWriter::create(corner_uv_file_.path(), CornerUvOutput::kCornerUvBytes, io_);
+      if (!writer.ok()) return writer.status();
+      uv_writer.emplace(std::move(writer).value());
+      sinks.corner_uvs = [&](std::span<const float> uvs) {
+        return uv_writer->append(reinterpret_cast<const std::byte*>(uvs.data()), uvs.size() / 6);
+      };
+    }
     auto split = split_ply(*reader_, io_, sinks);
     if (!split.ok()) return split.status();
+    if (uv_writer) OCTOLOD_RETURN_IF_ERROR(uv_writer->finish());
     reader_.reset();  // frees the PLY buffers before the next phase
     result_.vertex_count = split->vertex_count;
     result_.triangle_count = split->triangle_count;
@@ -260,7 +318,7 @@ class SoupBuilder {
     // batch while splitting, then the output batch and the soup writer. The array is at most
     // half the budget, so the sort gets at least 1/4 of it minus the reader's file buffer.
     const std::uint64_t sort_budget =
-        options_.memory_budget_bytes - vertex_array_bytes - 2 * io_ - kPlyFileBuffer;
+        options_.memory_budget_bytes - vertex_array_bytes - (corner_uvs_ ? 3 : 2) * io_ - kPlyFileBuffer;
     // Triangle order for either SoupOrder: the split's order already, so the sort only holds
     // the records (spilling runs when they do not fit) until the vertex array is complete.
     auto sorter = RecordSorter::create(
@@ -282,10 +340,13 @@ class SoupBuilder {
     OCTOLOD_RETURN_IF_ERROR(triangles.finish());
     progress("dereference", 0, result_.triangle_count);
 
-    // In use while the soup is written: the vertex array, the sort, the output batch.
-    auto soup = open_output(true, vertex_array_bytes + sort_budget + io_);
+    // In use while the soup is written: the vertex array, the sort, the output batch (and the
+    // corner UV reader).
+    auto soup = open_output(true, vertex_array_bytes + sort_budget + (corner_uvs_ ? 2 : 1) * io_);
     if (!soup.ok()) return soup.status();
-    ProgressOutput out(*soup.value(), [this](std::uint64_t done) {
+    auto last = with_corner_uvs(*soup.value());
+    if (!last.ok()) return last.status();
+    ProgressOutput out(*last.value(), [this](std::uint64_t done) {
       progress("dereference", done, result_.triangle_count);
     });
     OCTOLOD_RETURN_IF_ERROR(dereference_in_core(
@@ -304,9 +365,12 @@ class SoupBuilder {
     // of what six io buffers and the PLY reader's file buffer leave. The window pass runs
     // inside the split, with the PLY reader, the triangle batch, the vertex reader and the
     // output batch; the other half of the budget is the soup's consumer's
-    // (SoupOptions::sink_start), or the order sort's for SoupOrder::by_triangle.
+    // (SoupOptions::sink_start), or the order sort's for SoupOrder::by_triangle, which corner
+    // UVs take too (they are patched into the records in triangle order, read through one more
+    // io buffer, which the split wrote through another).
+    const bool by_triangle = options_.order == SoupOrder::by_triangle || corner_uvs_;
     const std::uint64_t quarter =
-        (options_.memory_budget_bytes - 6 * io_ - kPlyFileBuffer) / 4;
+        (options_.memory_budget_bytes - (corner_uvs_ ? 7 : 6) * io_ - kPlyFileBuffer) / 4;
     TempFile vertex_file = make_temp_file(options_.work_dir, "vertices");
     TempFile triangle_file;  // only when faces come before the last vertex
     std::optional<RecordWriter> vertex_writer;
@@ -326,7 +390,7 @@ class SoupBuilder {
     auto start_window = [&]() -> Status {
       OCTOLOD_RETURN_IF_ERROR(vertex_writer->finish());
       vertex_writer.reset();
-      if (options_.order == SoupOrder::by_triangle) {
+      if (by_triangle) {
         auto created = RecordSorter::create(
             soup_record_bytes(layout_),
             sort_key_u32_at(soup_triangle_id_offset(layout_), soup_record_bytes(layout_)),
@@ -422,11 +486,13 @@ class SoupBuilder {
     vertex_file.remove();
     if (order) {
       OCTOLOD_RETURN_IF_ERROR(order->finish());
-      // In use: the merging order sort, the output batch.
-      auto opened = open_output(false, quarter + io_);
+      // In use: the merging order sort, the output batch (and the corner UV reader).
+      auto opened = open_output(false, quarter + (corner_uvs_ ? 2 : 1) * io_);
       if (!opened.ok()) return opened.status();
       soup = std::move(opened).value();
-      OCTOLOD_RETURN_IF_ERROR(drain_order(*order, *soup));
+      auto last = with_corner_uvs(*soup);
+      if (!last.ok()) return last.status();
+      OCTOLOD_RETURN_IF_ERROR(drain_order(*order, *last.value()));
     }
     return soup->finish();
   }
@@ -467,8 +533,18 @@ class SoupBuilder {
     return {};
   }
 
+  // The records' way into `soup` once they come in triangle order: through a CornerUvOutput
+  // when the faces carry corner UVs (kept as corner_uv_output_), else straight.
+  Result<RecordOutput*> with_corner_uvs(RecordOutput& soup) {
+    if (!corner_uvs_) return &soup;
+    auto uvs = RecordReader::open(corner_uv_file_.path(), CornerUvOutput::kCornerUvBytes, io_);
+    if (!uvs.ok()) return uvs.status();
+    corner_uv_output_ = std::make_unique<CornerUvOutput>(soup, layout_, std::move(uvs).value());
+    return corner_uv_output_.get();
+  }
+
   // SoupOrder::by_triangle: the order sort's stream written to the soup.
-  Status drain_order(RecordSorter& order, SoupOutput& soup) {
+  Status drain_order(RecordSorter& order, RecordOutput& soup) {
     const std::size_t record_bytes = soup_record_bytes(layout_);
     std::uint64_t done = 0;
     for (;;) {
@@ -505,6 +581,9 @@ class SoupBuilder {
   double consume_seconds_ = 0;  // inside SoupOptions::mesh_sink.consume
   double window_in_split_seconds_ = 0;  // the window pass run from the split's triangle sink
   TempFile soup_file_;
+  bool corner_uvs_ = false;      // the faces carry texture coordinates per corner (PlyInfo)
+  TempFile corner_uv_file_;      // and the split wrote them here, in triangle order
+  std::unique_ptr<CornerUvOutput> corner_uv_output_;
   SoupResult result_;
 };
 

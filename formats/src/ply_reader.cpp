@@ -13,6 +13,8 @@
 #include <initializer_list>
 #include <limits>
 #include <optional>
+#include <span>
+#include <unordered_map>
 #include <string>
 #include <utility>
 #include <vector>
@@ -38,6 +40,7 @@ struct PropertyPlan {
   double divisor = 0.0;          // integer colours: divided by their type's maximum; 0 = as is
   int axis = -1;                 // positions: 0, 1, 2 for x, y, z (less the reader's origin)
   bool is_index_list = false;    // faces: the vertex_indices / vertex_index list
+  bool is_uv_list = false;       // faces: the texcoord list (u, v per corner)
   std::size_t offset = 0;        // binary elements without lists: byte offset in the entry
 };
 
@@ -119,8 +122,10 @@ Status plan_vertices(const ply::Element& element, const std::string& path, Eleme
   return {};
 }
 
-// Face semantics: the index list, whose items must be integers.
-Status plan_faces(const ply::Element& element, const std::string& path, ElementPlan& plan) {
+// Face semantics: the index list, whose items must be integers, and the texture coordinates
+// per corner (`texcoord`, MeshLab's and photogrammetry tools' name), whose items must be floats.
+Status plan_faces(const ply::Element& element, const std::string& path, ElementPlan& plan,
+                  PlyInfo& info) {
   int list = element.find("vertex_indices");
   if (list < 0) list = element.find("vertex_index");
   auto error = [&](const std::string& what) {
@@ -133,6 +138,13 @@ Status plan_faces(const ply::Element& element, const std::string& path, ElementP
     return error("face property '" + p.property.name + "' has non-integer items (" +
                  std::string(ply::to_string(p.property.type)) + ")");
   p.is_index_list = true;
+  const int uvs = element.find("texcoord");
+  if (uvs < 0) return {};
+  PropertyPlan& t = plan.properties[static_cast<std::size_t>(uvs)];
+  if (!t.property.is_list || ply::is_integer(t.property.type))
+    return error("face property 'texcoord' is not a list of floats (u, v per corner)");
+  t.is_uv_list = true;
+  info.corner_uvs = true;
   return {};
 }
 
@@ -194,7 +206,7 @@ Result<Plan> build_plan(const ply::Header& header, const ply::FileBuffer& in) {
     p.count = element.count;
     std::size_t offset = 0;
     for (const ply::Property& property : element.properties) {
-      p.properties.push_back(PropertyPlan{property, kNoSlot, 0.0, -1, false, offset});
+      p.properties.push_back(PropertyPlan{.property = property, .offset = offset});
       if (property.is_list) p.fixed_size = false;
       offset += ply::size_of(property.type);
     }
@@ -206,13 +218,16 @@ Result<Plan> build_plan(const ply::Header& header, const ply::FileBuffer& in) {
       plan.info.vertex_count = element.count;
     } else if (element.name == "face") {
       p.role = Role::faces;
-      OCTOLOD_RETURN_IF_ERROR(plan_faces(element, path, p));
+      OCTOLOD_RETURN_IF_ERROR(plan_faces(element, path, p, plan.info));
       plan.info.face_count = element.count;
     }
     plan.elements.push_back(std::move(p));
   }
   if (vertex == nullptr)
     return bad_input_error(ply::message_at_line(path, header.lines, "the header declares no 'vertex' element"));
+  // uv is the layout's last group: the vertices' other slots stay where plan_vertices put them,
+  // and the uv slots, which no vertex property fills, stay zero
+  if (plan.info.corner_uvs) plan.info.layout.uv = true;
   OCTOLOD_RETURN_IF_ERROR(check_counts(header, plan, in.file_size(), path));
   if (vertex->count > std::numeric_limits<std::uint32_t>::max())
     return unsupported_error(ply::message_at_line(
@@ -285,6 +300,7 @@ class StreamReader final : public PlyReader {
       batch.kind = PlyBatch::Kind::triangles;
       batch.first = triangles_emitted_;
       batch.triangles = std::span<const std::uint32_t>(triangles_.data(), produced * 3);
+      if (info_.corner_uvs) batch.corner_uvs = std::span<const float>(corner_uvs_.data(), produced * 6);
       triangles_emitted_ += produced;
       return {};
     }
@@ -451,6 +467,7 @@ class StreamReader final : public PlyReader {
   Status decode_faces(const ElementPlan& element, std::size_t& produced) {
     const std::size_t room = batch_bytes_ / (3 * sizeof(std::uint32_t));
     if (triangles_.empty()) triangles_.resize(room * 3);
+    if (info_.corner_uvs) return decode_faces_with_uvs(element, room, produced);
     if constexpr (Source::kBinary) {
       const PropertyPlan& p = element.properties.front();
       if (!face_.started && element.properties.size() == 1 &&
@@ -542,13 +559,7 @@ class StreamReader final : public PlyReader {
           const std::uint64_t where = source_.position();
           std::int64_t index = 0;
           OCTOLOD_RETURN_IF_ERROR(source_.read_integer(p.property.type, index));
-          if (index < 0)
-            return error_at(where, "face " + std::to_string(index_) +
-                                       " has a negative vertex index " + std::to_string(index));
-          if (static_cast<std::uint64_t>(index) >= info_.vertex_count)
-            return error_at(where, "face " + std::to_string(index_) + " has vertex index " +
-                                       std::to_string(index) + ", out of range (the file has " +
-                                       std::to_string(info_.vertex_count) + " vertices)");
+          OCTOLOD_RETURN_IF_ERROR(check_vertex_index(where, index));
           const auto v = static_cast<std::uint32_t>(index);
           if (face_.done == 0) {
             face_.first = v;
@@ -571,12 +582,109 @@ class StreamReader final : public PlyReader {
     return {};
   }
 
+  // Faces with texture coordinates per corner: each entry is read whole (its indices and its
+  // texcoord list, in either order), then fanned out; a fan larger than the batch's room
+  // continues in the next batch. index_ moves on once its whole fan is out.
+  Status decode_faces_with_uvs(const ElementPlan& element, std::size_t room, std::size_t& produced) {
+    if (corner_uvs_.empty()) corner_uvs_.resize(room * 6);
+    for (;;) {
+      // the polygon read last: triangles (p0, p[k], p[k + 1]) as decode_faces_generic fans them
+      for (; polygon_fanned_ + 2 < polygon_.size() && produced < room; ++polygon_fanned_, ++produced) {
+        const std::size_t k = polygon_fanned_ + 1;
+        const std::size_t corners[3] = {0, k, k + 1};
+        for (int c = 0; c < 3; ++c) {
+          triangles_[produced * 3 + static_cast<std::size_t>(c)] = polygon_[corners[c]];
+          corner_uvs_[produced * 6 + 2 * static_cast<std::size_t>(c)] = polygon_uvs_[2 * corners[c]];
+          corner_uvs_[produced * 6 + 2 * static_cast<std::size_t>(c) + 1] = polygon_uvs_[2 * corners[c] + 1];
+        }
+      }
+      if (polygon_fanned_ + 2 < polygon_.size()) return {};  // the batch is full
+      if (!polygon_.empty()) {
+        polygon_.clear();
+        ++index_;
+      }
+      if (index_ == element.count || produced == room) return {};
+      OCTOLOD_RETURN_IF_ERROR(read_polygon_with_uvs(element));
+      polygon_fanned_ = 0;
+    }
+  }
+
+  // One face entry into polygon_ (vertex indices, checked) and polygon_uvs_ (u, v per corner).
+  Status read_polygon_with_uvs(const ElementPlan& element) {
+    OCTOLOD_RETURN_IF_ERROR(source_.begin_entry(context(element)));
+    polygon_.clear();
+    polygon_uvs_.clear();
+    std::uint64_t uvs_where = source_.position();
+    for (const PropertyPlan& p : element.properties) {
+      if (!p.is_index_list && !p.is_uv_list) {
+        OCTOLOD_RETURN_IF_ERROR(skip_property(p));
+        continue;
+      }
+      const std::uint64_t where = source_.position();
+      std::int64_t length = 0;
+      OCTOLOD_RETURN_IF_ERROR(source_.read_integer(p.property.count_type, length));
+      if (p.is_index_list) {
+        if (length < 3 || static_cast<std::uint64_t>(length) > kMaxPolygonVertices)
+          return error_at(where, "face " + std::to_string(index_) + " has " + std::to_string(length) +
+                                     " vertices (a polygon needs 3 to " +
+                                     std::to_string(kMaxPolygonVertices) + ")");
+        for (std::int64_t i = 0; i < length; ++i) {
+          const std::uint64_t at = source_.position();
+          std::int64_t index = 0;
+          OCTOLOD_RETURN_IF_ERROR(source_.read_integer(p.property.type, index));
+          OCTOLOD_RETURN_IF_ERROR(check_vertex_index(at, index));
+          polygon_.push_back(static_cast<std::uint32_t>(index));
+        }
+        continue;
+      }
+      uvs_where = where;
+      if (length < 0 || static_cast<std::uint64_t>(length) > 2 * kMaxPolygonVertices)
+        return error_at(where, "face " + std::to_string(index_) + " has " + std::to_string(length) +
+                                   " texture coordinates (a polygon has 3 to " +
+                                   std::to_string(kMaxPolygonVertices) + " corners, u and v each)");
+      for (std::int64_t i = 0; i < length; ++i) {
+        const std::uint64_t at = source_.position();
+        double value = 0;
+        OCTOLOD_RETURN_IF_ERROR(source_.read_number(p.property.type, value));
+        const auto converted = static_cast<float>(value);
+        if (!std::isfinite(converted) || std::abs(converted) > kMaxVertexValue)
+          return error_at(at, "face " + std::to_string(index_) + " has a texture coordinate of " +
+                                  (std::isfinite(converted) ? beyond_max_vertex_value(converted)
+                                                            : std::string(std::isnan(converted) ? "NaN" : "Inf")));
+        polygon_uvs_.push_back(converted);
+      }
+    }
+    OCTOLOD_RETURN_IF_ERROR(source_.end_entry());
+    if (polygon_uvs_.size() != 2 * polygon_.size())
+      return error_at(uvs_where, "face " + std::to_string(index_) + " has " +
+                                     std::to_string(polygon_uvs_.size()) + " texture coordinates for " +
+                                     std::to_string(polygon_.size()) +
+                                     " vertices (texcoord holds u and v for every corner)");
+    return {};
+  }
+
+  // An index read from a face's list: a vertex of the file.
+  Status check_vertex_index(std::uint64_t where, std::int64_t index) const {
+    if (index < 0)
+      return error_at(where, "face " + std::to_string(index_) + " has a negative vertex index " +
+                                 std::to_string(index));
+    if (static_cast<std::uint64_t>(index) >= info_.vertex_count)
+      return error_at(where, "face " + std::to_string(index_) + " has vertex index " +
+                                 std::to_string(index) + ", out of range (the file has " +
+                                 std::to_string(info_.vertex_count) + " vertices)");
+    return {};
+  }
+
   std::unique_ptr<ply::FileBuffer> in_;
   Source source_;
   Plan plan_;
   std::size_t batch_bytes_;
   std::vector<float> vertices_;
   std::vector<std::uint32_t> triangles_;
+  std::vector<float> corner_uvs_;          // info_.corner_uvs: u, v per corner of triangles_
+  std::vector<std::uint32_t> polygon_;     // decode_faces_with_uvs: the face read last
+  std::vector<float> polygon_uvs_;         // its texcoord list
+  std::size_t polygon_fanned_ = 0;         // its fan's triangles already in a batch
   std::size_t element_ = 0;   // current element
   std::uint64_t index_ = 0;   // next entry of the current element
   FaceProgress face_;
@@ -586,6 +694,38 @@ class StreamReader final : public PlyReader {
   bool origin_pending_ = false;  // the first vertex sets info_.position_origin
   Status failure_;
 };
+
+// read_ply's wedges: one vertex per distinct (file vertex, u, v) of the corners, in first-use
+// order, carrying that u, v.
+void weld_corner_uvs(PlyMesh& mesh, std::span<const float> corner_uvs) {
+  const VertexLayout layout = mesh.info.layout;
+  const std::size_t floats = layout.floats();
+  struct Wedge {
+    std::uint32_t vertex;
+    std::uint32_t u, v;  // bit patterns
+    bool operator==(const Wedge&) const = default;
+  };
+  struct WedgeHash {
+    std::size_t operator()(const Wedge& w) const {
+      return std::hash<std::uint64_t>{}((std::uint64_t{w.vertex} << 32) ^ (std::uint64_t{w.u} * 0x9E3779B1u) ^ w.v);
+    }
+  };
+  std::unordered_map<Wedge, std::uint32_t, WedgeHash> wedges;
+  std::vector<float> vertices;
+  for (std::size_t corner = 0; corner < mesh.triangles.size(); ++corner) {
+    const float u = corner_uvs[2 * corner], v = corner_uvs[2 * corner + 1];
+    const Wedge key{mesh.triangles[corner], std::bit_cast<std::uint32_t>(u), std::bit_cast<std::uint32_t>(v)};
+    const auto [it, added] = wedges.try_emplace(key, static_cast<std::uint32_t>(wedges.size()));
+    if (added) {
+      const float* source = mesh.vertices.data() + std::size_t{key.vertex} * floats;
+      vertices.insert(vertices.end(), source, source + floats);
+      vertices[vertices.size() - floats + layout.uv_offset()] = u;
+      vertices[vertices.size() - floats + layout.uv_offset() + 1] = v;
+    }
+    mesh.triangles[corner] = it->second;
+  }
+  mesh.vertices = std::move(vertices);
+}
 
 }  // namespace
 
@@ -627,16 +767,20 @@ Result<PlyMesh> read_ply(const std::filesystem::path& path, const PlyReadOptions
   // The counts were checked against the file size by open(), so reserving them is safe.
   mesh.vertices.reserve(reader.info().vertex_count * reader.info().layout.floats());
   mesh.triangles.reserve(reader.info().face_count * 3);
+  std::vector<float> corner_uvs;
   for (;;) {
     Result<PlyBatch> batch = reader.next();
     if (!batch.ok()) return batch.status();
     if (batch->kind == PlyBatch::Kind::end) break;
-    if (batch->kind == PlyBatch::Kind::vertices)
+    if (batch->kind == PlyBatch::Kind::vertices) {
       mesh.vertices.insert(mesh.vertices.end(), batch->vertices.begin(), batch->vertices.end());
-    else
+    } else {
       mesh.triangles.insert(mesh.triangles.end(), batch->triangles.begin(), batch->triangles.end());
+      corner_uvs.insert(corner_uvs.end(), batch->corner_uvs.begin(), batch->corner_uvs.end());
+    }
   }
   mesh.info = reader.info();  // with the origin the first vertex set
+  if (mesh.info.corner_uvs) weld_corner_uvs(mesh, corner_uvs);
   return mesh;
 }
 

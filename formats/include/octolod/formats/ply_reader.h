@@ -8,8 +8,9 @@
 // int8/uint8/int16/uint16/int32/uint32/float32/float64; list properties of any count/item type.
 // Kept vertex properties: x,y,z; nx,ny,nz; red,green,blue | diffuse_red,diffuse_green,diffuse_blue
 // (alpha read and dropped) as uchar or float; u,v | s,t | texture_u,texture_v |
-// texture_s,texture_t. Faces: the list property vertex_indices or vertex_index. Everything else
-// is skipped.
+// texture_s,texture_t. Faces: the list property vertex_indices or vertex_index, and texture
+// coordinates per corner as the float list texcoord (u, v for every corner, the way MeshLab and
+// photogrammetry tools write textured meshes: PlyInfo::corner_uvs). Everything else is skipped.
 //
 // Errors (Status bad_input unless noted) name the file and the line (ascii) or byte offset
 // (binary): a path that is not a regular file (io: check_input_file, input_file.h),
@@ -21,6 +22,11 @@
 // Details of the contract:
 // - Declared counts are checked against the file size in open(), before anything is allocated
 //   (binary: exact bytes per entry; ascii: two characters per value; faces: 3 indices).
+// - Corner UVs: a texcoord list must hold two floats per index of its face, finite and within
+//   ±kMaxVertexValue. They replace the vertices' own u,v, if any: the layout has uv, vertex
+//   batches hold zeros (or the vertices' u,v) in its slots, and triangle batches carry each
+//   corner's (u, v) beside its index. Such a face is decoded whole before it is fanned out, so
+//   memory is the batch plus the largest face (at most 2^20 corners).
 // - Colours of an integer type are divided by the type's maximum (uchar c -> float(c / 255.0)),
 //   float/double colours are kept as they are; info().color_type is float32 when `red` is a
 //   float type, else uchar. An incomplete group (nx without nz, u without v) is skipped.
@@ -60,6 +66,9 @@ struct PlyInfo {
   PlyColorType color_type = PlyColorType::uchar;  // on-disk colour type when layout.color
   std::uint64_t header_bytes = 0;  // bytes up to and including the end_header line
   bool double_positions = false;   // x, y or z is declared double (float64)
+  // The faces carry texture coordinates per corner (texcoord): layout.uv is set, but the vertex
+  // batches' uv slots are not the texture coordinates, PlyBatch::corner_uvs are.
+  bool corner_uvs = false;
   // Subtracted from every position before it is rounded to float (PlyReadOptions): the decoded
   // positions are relative to it. Zeros unless an origin applies; with recentre_double_positions
   // it is known once the first vertex batch has been returned.
@@ -92,6 +101,9 @@ struct PlyBatch {
   std::span<const float> vertices;
   // kind == triangles: count * 3 vertex indices, each < info().vertex_count.
   std::span<const std::uint32_t> triangles;
+  // kind == triangles and info().corner_uvs: count * 6 floats, (u, v) of each corner in the
+  // order of `triangles`; empty otherwise. Valid until the next call to next().
+  std::span<const float> corner_uvs;
 };
 
 class PlyReader {
@@ -111,10 +123,15 @@ class PlyReader {
   PlyInfo info_;
 };
 
-// Convenience for tests and small files: the whole mesh in memory.
+// Convenience for tests and small files: the whole mesh in memory, as an indexed mesh of
+// wedges. Without corner UVs the vertices are the file's. With them (info.corner_uvs) every
+// distinct pair of a vertex and a corner's (u, v) becomes one vertex (the file's vertex with that
+// u, v), numbered in the order the triangles first use them; vertices no triangle uses are
+// dropped.
 struct PlyMesh {
   PlyInfo info;
-  std::vector<float> vertices;          // info.vertex_count * info.layout.floats()
+  std::vector<float> vertices;          // layout.floats() per vertex (info.vertex_count of them
+                                        // unless info.corner_uvs)
   std::vector<std::uint32_t> triangles;  // 3 per triangle
 };
 // (buffer_bytes of `options` is ignored: the whole mesh is held anyway.)
