@@ -490,6 +490,54 @@ TEST_F(BakeTest, CornerUvsBakeIntoTheSameTreeAsWedges) {
   EXPECT_EQ(manifest_to_json(mc), manifest_to_json(without_run_details(written_manifest(path("wedges"), rw.value()))));
 }
 
+// The image a PLY's TextureFile comment names (next to it) is copied into TREE/texture/ and
+// named by the manifest. A missing image, a name reaching outside the PLY's directory and an
+// input without UVs give a tree without a texture and say why.
+TEST_F(BakeTest, TheTextureThePlyNamesIsCopiedIntoTheTree) {
+  auto mesh = read_ply(small_ply());
+  ASSERT_TRUE(mesh.ok()) << mesh.status().message();
+  fs::create_directories(path("in"));
+  const std::string image = "\x89PNG\r\n\x1a\n not really an image, but bytes to copy";
+  test::write_bytes(path("in/rock tex.png"), image);
+  test::write_bytes(path("outside.png"), image);
+  const auto bake_named = [&](const std::string& texture, const std::string& out) {
+    test::write_corner_uv_ply(path("in/rock.ply"), mesh->info.layout, mesh->vertices, mesh->triangles, texture);
+    BakeOptions o = options(out);
+    o.input = path("in/rock.ply");
+    auto r = bake(o);
+    EXPECT_TRUE(r.ok()) << r.status().message();
+    return r.ok() ? std::move(r).value() : BakeReport{};
+  };
+  const BakeReport copied = bake_named("rock tex.png", "copied");
+  EXPECT_EQ(copied.texture_warning, "");
+  EXPECT_EQ(written_manifest(path("copied"), copied).texture, "texture/rock tex.png");
+  EXPECT_EQ(read_bytes(path("copied/texture/rock tex.png")), image);
+
+  const std::pair<std::string, std::string> refused[] = {
+      {"missing.png", "its TextureFile comment names 'missing.png', but '" + path("in/missing.png").string() +
+                          "' is not a file: no texture in the tree"},
+      {"../outside.png", "its TextureFile comment names '../outside.png', which is not a path inside the PLY's "
+                         "directory: not copied into the tree"}};
+  for (const auto& [name, warning] : refused) {
+    const BakeReport r = bake_named(name, "refused");
+    EXPECT_EQ(r.texture_warning, warning);
+    EXPECT_EQ(written_manifest(path("refused"), r).texture, "");
+    EXPECT_FALSE(fs::exists(path("refused/texture")));
+  }
+  // without UVs nothing indexes the image
+  test::write_bytes(path("in/flat.ply"),
+                    "ply\nformat ascii 1.0\ncomment TextureFile rock tex.png\nelement vertex 3\nproperty float x\n"
+                    "property float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\n"
+                    "end_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
+  BakeOptions flat = options("flat");
+  flat.input = path("in/flat.ply");
+  auto r = bake(flat);
+  ASSERT_TRUE(r.ok()) << r.status().message();
+  EXPECT_EQ(r->texture_warning,
+            "its TextureFile comment names 'rock tex.png', but it has no texture coordinates: no texture in the tree");
+  EXPECT_FALSE(fs::exists(path("flat/texture")));
+}
+
 TEST_F(BakeTest, ASecondBakeReplacesTheFirstAtomically) {
   ASSERT_TRUE(bake(options("out")).ok());
   BakeOptions again = options("out");

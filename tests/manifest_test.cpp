@@ -90,6 +90,25 @@ TEST(Manifest, LodRatioRoundTripsAndIsAHalfWhenAbsent) {
   }
 }
 
+// The texture: written only when there is one, in its sorted place; relative and inside the tree.
+TEST(Manifest, TextureRoundTripsIsAbsentWhenEmptyAndStaysInsideTheTree) {
+  Manifest m = small_manifest();
+  EXPECT_EQ(manifest_to_json(m).find("texture"), std::string::npos);
+  m.texture = "texture/stone scan.jpg";
+  const std::string text = manifest_to_json(m);
+  EXPECT_EQ(text, nlohmann::json::parse(text).dump(1) + "\n");
+  Result<Manifest> back = manifest_from_json(text, "m.json");
+  ASSERT_TRUE(back.ok()) << back.status().message();
+  EXPECT_EQ(back->texture, m.texture);
+  for (const char* escaping : {"../stone.jpg", "/etc/passwd", "texture//stone.jpg"}) {
+    m.texture = escaping;
+    Result<Manifest> refused = manifest_from_json(manifest_to_json(m), "m.json");
+    EXPECT_EQ(refused.status().code(), ErrorCode::bad_input) << escaping;
+    EXPECT_NE(refused.status().message().find("\"texture\" must be a relative path"), std::string::npos)
+        << refused.status().message();
+  }
+}
+
 // The manifest is written node by node, never as one document: its text must still be exactly
 // the whole document's dump(1) (keys sorted, one space per level), with and without nodes.
 TEST(Manifest, StreamedTextIsTheWholeDocumentsDump) {

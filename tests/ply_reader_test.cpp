@@ -275,6 +275,7 @@ TEST(PlyReader, CornerUvsComeWithTheirTrianglesAndReadPlyMakesWedges) {
   // one vertex per (vertex, u, v) in first use order: vertex 2 twice, once per side of the seam
   const PlyMesh mesh = read_ok(path);
   EXPECT_TRUE(mesh.info.corner_uvs);
+  EXPECT_EQ(mesh.info.texture_file, "stone.png");
   EXPECT_EQ(mesh.info.layout, (VertexLayout{.uv = true}));
   EXPECT_EQ(mesh.triangles, (std::vector<std::uint32_t>{0, 1, 2, 0, 2, 3, 1, 4, 5}));
   EXPECT_EQ(mesh.vertices, (std::vector<float>{0, 0, 0, 0, 0, 1, 0, 0, 1, 0, 1, 1, 0, 1, 1, 0, 1, 0, 0, 1,
@@ -330,6 +331,26 @@ TEST(PlyReader, CornerUvsOfAHugePolygonSpanBatches) {
         ASSERT_EQ(stream.uvs[6 * t + 2 * c + 1], static_cast<float>(-0.5 * corners[c])) << t;
       }
     }
+  }
+}
+
+// The image a textured mesh's UVs index: the first "comment TextureFile <name>", the keyword in
+// any case, the name as written (spaces inside kept, around it dropped).
+TEST(PlyReader, InfoNamesTheTextureFileOfTheFirstTextureFileComment) {
+  ScratchDir dir;
+  const std::pair<std::string, std::string> cases[] = {
+      {"comment TextureFile stone.png\n", "stone.png"},
+      {"comment   texturefile \t old stone.jpg  \ncomment TextureFile second.png\n", "old stone.jpg"},
+      {"comment TextureFiles x.png\ncomment a TextureFile y.png\ncomment TextureFile\n", ""},
+      {"", ""}};
+  for (const auto& [comments, expected] : cases) {
+    SCOPED_TRACE(comments);
+    const auto path = dir.file("textured.ply");
+    write_bytes(path, "ply\nformat ascii 1.0\n" + comments +
+                          "element vertex 0\nproperty float x\nproperty float y\nproperty float z\nend_header\n");
+    auto reader = PlyReader::open(path);
+    ASSERT_TRUE(reader.ok()) << reader.status().message();
+    EXPECT_EQ(reader.value()->info().texture_file, expected);
   }
 }
 

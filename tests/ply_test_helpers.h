@@ -128,10 +128,12 @@ inline TestMesh strip_mesh(VertexLayout layout, bool byte_colors, std::uint32_t 
 // The mesh (VertexLayout floats with uv, `triangles` 3 per triangle) as a binary little-endian
 // PLY whose faces carry the texture coordinates (a `texcoord` list per face after its indices,
 // as MeshLab writes textured meshes) and whose vertices do not: vertices equal but for u, v are
-// written once, so a UV seam's two sides share one vertex. Colours as floats (exact).
+// written once, so a UV seam's two sides share one vertex. Colours as floats (exact). The header
+// names `texture` in a TextureFile comment, unless it is empty.
 inline void write_corner_uv_ply(const std::filesystem::path& path, VertexLayout layout,
                                 const std::vector<float>& vertices,
-                                const std::vector<std::uint32_t>& triangles) {
+                                const std::vector<std::uint32_t>& triangles,
+                                const std::string& texture = "") {
   ASSERT_TRUE(layout.uv);
   const std::size_t floats = layout.floats(), kept = layout.uv_offset();
   std::map<std::vector<float>, std::uint32_t> welded;
@@ -145,8 +147,9 @@ inline void write_corner_uv_ply(const std::filesystem::path& path, VertexLayout 
       for (float f : key) append_scalar(vertex_bytes, f, false);
     id[v] = it->second;
   }
-  std::string text = "ply\nformat binary_little_endian 1.0\ncomment TextureFile rock.png\nelement vertex " +
-                     std::to_string(welded.size()) + "\nproperty float x\nproperty float y\nproperty float z\n";
+  std::string text = "ply\nformat binary_little_endian 1.0\n";
+  if (!texture.empty()) text += "comment TextureFile " + texture + "\n";
+  text += "element vertex " + std::to_string(welded.size()) + "\nproperty float x\nproperty float y\nproperty float z\n";
   if (layout.normal) text += "property float nx\nproperty float ny\nproperty float nz\n";
   if (layout.color) text += "property float red\nproperty float green\nproperty float blue\n";
   text += "element face " + std::to_string(triangles.size() / 3) +

@@ -29,6 +29,7 @@ nlohmann::json report_json(const bake::BakeReport& r, const std::string& output)
           {"vertices", m.input_vertices},
           {"triangles", m.input_triangles},
           {"layout", m.layout.describe()},
+          {"texture", m.texture},
           {"nodes", r.nodes},
           {"leaves", r.leaves},
           {"depth", r.depth},
@@ -123,6 +124,7 @@ int run_bake(const BakeArgs& args, const CommandContext& context) {
   warn_trailing_bytes(args.input, r.input_trailing_bytes);
   if (const std::optional<std::string> warning = float_precision_warning(r.header.bounds))
     warn(args.input + ": " + *warning);
+  if (!r.texture_warning.empty()) warn(args.input + ": " + r.texture_warning);
   if (context.json) {
     print_json(report_json(r, args.output));
     return 0;
@@ -132,7 +134,8 @@ int run_bake(const BakeArgs& args, const CommandContext& context) {
       "%llu triangles), %.1f MB in %.2f s (soup %.2f s, octree + overlapping LODs %.2f s, LODs "
       "after the stream %.2f s), peak RSS %.1f MiB\n",
       args.output.c_str(), static_cast<unsigned long long>(r.header.input_triangles),
-      r.header.layout.describe().c_str(), static_cast<unsigned long long>(r.nodes),
+      (r.header.layout.describe() + (r.header.texture.empty() ? "" : ", texture " + r.header.texture)).c_str(),
+      static_cast<unsigned long long>(r.nodes),
       static_cast<unsigned long long>(r.leaves), r.depth,
       static_cast<unsigned long long>(r.lods),
       static_cast<unsigned long long>(r.root_coarsest_triangles),

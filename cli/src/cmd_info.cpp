@@ -150,6 +150,7 @@ int run_info(const std::string& tree, const CommandContext& context) {
                 {"layout", m.layout.describe()},
                 {"floats_per_vertex", m.layout.floats()},
                 {"origin", m.origin},
+                {"texture", m.texture},
                 {"bounds", {{"min", m.bounds.min}, {"max", m.bounds.max}}},
                 {"input_vertices", m.input_vertices},
                 {"input_triangles", m.input_triangles},
@@ -180,6 +181,8 @@ int run_info(const std::string& tree, const CommandContext& context) {
   if (m.origin != std::array<double, 3>{0.0, 0.0, 0.0})
     std::printf("origin      [%.17g %.17g %.17g] (positions below and in the node files are relative to it)\n",
                 m.origin[0], m.origin[1], m.origin[2]);
+  if (!m.texture.empty())
+    std::printf("texture     %s (v up: (0, 0) is the image's lower-left corner)\n", m.texture.c_str());
   if (m.bounds.empty())
     std::printf("bounds      empty (no triangles)\n");
   else

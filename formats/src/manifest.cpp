@@ -81,6 +81,8 @@ bool safe_relative(const std::string& p) {
 
 Status validate_manifest(const Manifest& m, std::string_view name) {
   if (m.nodes.empty()) return invalid(name, "no nodes");
+  if (!m.texture.empty() && !safe_relative(m.texture))
+    return invalid(name, "\"texture\" must be a relative path without '..'");
   const auto count = static_cast<std::int64_t>(m.nodes.size());
   for (std::size_t i = 0; i < m.nodes.size(); ++i) {
     const NodeInfo& n = m.nodes[i];
@@ -162,7 +164,7 @@ json node_to_json(const NodeInfo& n) {
 // node as a DOM). The first error of `node` or `out` ends it.
 Status emit_manifest(const Manifest& m, std::size_t node_count, const ManifestNodeFn& node,
                      const std::function<Status(std::string_view)>& out) {
-  const json head{{"format", "octolod-manifest"},
+  json head{{"format", "octolod-manifest"},
                   {"version", m.version},
                   {"layout", layout_to_json(m.layout)},
                   {"origin", m.origin},
@@ -172,6 +174,7 @@ Status emit_manifest(const Manifest& m, std::size_t node_count, const ManifestNo
                   {"parameters", parameters_to_json(m.parameters)},
                   {"stage_seconds", m.stage_seconds},
                   {"stats", m.stats}};
+  if (!m.texture.empty()) head["texture"] = m.texture;
   std::string piece = "{\n";
   bool first_member = true;
   const auto start_member = [&](const std::string& key) {
@@ -255,6 +258,7 @@ Result<Manifest> manifest_from_reader(const Read& read, std::string_view name) {
     if (doc.contains("origin")) m.origin = doc.at("origin").get<std::array<double, 3>>();
     for (const double x : m.origin)
       if (!std::isfinite(x)) return invalid(name, "\"origin\" is not finite");
+    if (doc.contains("texture")) m.texture = doc.at("texture").get<std::string>();
     m.bounds = bounds_from_json(doc.at("bounds"));
     m.input_vertices = integer_at<std::uint64_t>(doc, "input_vertices");
     m.input_triangles = integer_at<std::uint64_t>(doc, "input_triangles");

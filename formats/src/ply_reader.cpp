@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <array>
 #include <bit>
+#include <cctype>
 #include <cmath>
 #include <initializer_list>
 #include <limits>
@@ -16,6 +17,7 @@
 #include <span>
 #include <unordered_map>
 #include <string>
+#include <string_view>
 #include <utility>
 #include <vector>
 
@@ -193,9 +195,29 @@ Status check_counts(const ply::Header& header, const Plan& plan, std::uint64_t f
   return {};
 }
 
+// The name in the first "comment TextureFile <name>" of `comments` (keyword in any case), or "".
+std::string texture_file(const std::vector<std::string>& comments) {
+  constexpr std::string_view kKeyword = "texturefile";
+  for (const std::string& comment : comments) {
+    const std::size_t start = comment.find_first_not_of(" \t");
+    if (start == std::string::npos || comment.size() - start <= kKeyword.size()) continue;
+    const std::string_view rest = std::string_view(comment).substr(start);
+    if (!std::equal(kKeyword.begin(), kKeyword.end(), rest.begin(),
+                    [](char a, char b) { return a == std::tolower(static_cast<unsigned char>(b)); }))
+      continue;
+    const std::string_view name = rest.substr(kKeyword.size());
+    if (name.front() != ' ' && name.front() != '\t') continue;
+    const std::size_t first = name.find_first_not_of(" \t");
+    const std::size_t last = name.find_last_not_of(" \t\r");
+    if (first != std::string_view::npos) return std::string(name.substr(first, last - first + 1));
+  }
+  return {};
+}
+
 Result<Plan> build_plan(const ply::Header& header, const ply::FileBuffer& in) {
   const std::string& path = in.path();
   Plan plan;
+  plan.info.texture_file = texture_file(header.comments);
   plan.info.path = path;
   plan.info.format = header.format;
   plan.info.header_bytes = header.bytes;

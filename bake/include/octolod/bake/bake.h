@@ -175,6 +175,10 @@ struct BakeReport {
   // Bytes after the input's last element, ignored (PlyInfo::trailing_bytes): worth a warning,
   // since more than padding usually means element counts in the header that are too small.
   std::uint64_t input_trailing_bytes = 0;
+  // Why the texture the input's TextureFile comment names was not copied into the tree
+  // (Manifest::texture stays empty): no UVs, a path outside the input's directory, no such file.
+  // Empty when it was copied or none was named.
+  std::string texture_warning;
 };
 
 // Bakes options.input into options.output (see the top of this file). Errors: usage for bad

@@ -75,6 +75,11 @@ struct Manifest {
   // runtime places the tree at this point, exporters add it back. Absent in manifests of bakes
   // before 2026-12-02: zeros.
   std::array<double, 3> origin{0.0, 0.0, 0.0};
+  // The image the layout's uv index, relative to the tree's root ('/'-separated, never ".."):
+  // the input's texture (its PLY's TextureFile comment), copied into the tree by the bake. UVs are
+  // as in the input: (0, 0) is the image's lower-left corner, v up (OpenGL's and MeshLab's
+  // convention; glTF's v is 1 - v). Empty when the input named none (written only when set).
+  std::string texture;
   Bounds bounds;                        // tight bounds of the model
   std::uint64_t input_vertices = 0;
   std::uint64_t input_triangles = 0;    // after fan triangulation, degenerate ones included
@@ -90,7 +95,7 @@ std::string manifest_to_json(const Manifest& manifest);
 std::string bake_parameters_to_json(const BakeParameters& parameters);
 // bad_input naming `name` unless `manifest` is a tree: nodes (at least the root) whose parents
 // precede them, parent/child links consistent and in range, depths one below the parent's, LOD
-// files relative and without "..", errors not negative or NaN, at least a node file header's
+// files and the texture relative and without "..", errors not negative or NaN, at least a node file header's
 // bytes (kNodeFileHeaderBytes). Every reader below checks it; a
 // manifest built in code is checked by StreamingTree::open.
 Status validate_manifest(const Manifest& manifest, std::string_view name);
