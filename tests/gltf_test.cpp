@@ -312,8 +312,85 @@ TEST(Gltf, TinygltfLoadsTheWrittenFiles) {
     const tinygltf::Accessor& uv = model.accessors[static_cast<std::size_t>(
         model.meshes[1].primitives[0].attributes.at("TEXCOORD_0"))];
     EXPECT_EQ(uv.type, TINYGLTF_TYPE_VEC2);
-    EXPECT_EQ(model.bufferViews[static_cast<std::size_t>(uv.bufferView)].byteStride, 20u);
+    const tinygltf::BufferView& uv_view = model.bufferViews[static_cast<std::size_t>(uv.bufferView)];
+    EXPECT_EQ(uv_view.byteStride, 20u);
+    // glTF's v runs down the image, octolod's up: every vertex's (u, 1 - v)
+    for (std::size_t v = 0; v < 4; ++v) {
+      float written[2];
+      std::memcpy(written, model.buffers[0].data.data() + uv_view.byteOffset + uv.byteOffset + 20 * v, 8);
+      EXPECT_EQ(written[0], meshes[1].vertices[5 * v + 3]) << v;
+      EXPECT_EQ(written[1], 1.0f - meshes[1].vertices[5 * v + 4]) << v;
+    }
+    EXPECT_TRUE(model.materials.empty());
+    EXPECT_TRUE(model.images.empty());
   }
+}
+
+// With a texture: one material with the image, embedded byte for byte, as its base colour, on
+// the primitives that have UVs (not on one without); tinygltf loads it in both containers.
+TEST(Gltf, TextureIsEmbeddedAsTheMaterialOfThePrimitivesWithUvs) {
+  TempDir dir;
+  std::string png = "\x89PNG\r\n\x1a\n";
+  png += std::string("an image's bytes after its signature");
+  const std::filesystem::path image = dir.path() / "stone.png";
+  std::ofstream(image, std::ios::binary) << png;
+  Result<GltfTexture> texture = read_gltf_texture(image);
+  ASSERT_TRUE(texture.ok()) << texture.status().message();
+  EXPECT_EQ(texture->mime_type, "image/png");
+  EXPECT_EQ(texture->name, "stone.png");
+  const std::vector<NodeMesh> meshes = {grid_mesh(6), quad_mesh({true, false, false})};
+  for (bool binary : {true, false}) {
+    GltfWriteOptions options;
+    options.binary = binary;
+    options.texture = texture.value();
+    const std::vector<std::byte> bytes = encode(meshes, options);
+    tinygltf::TinyGLTF loader;
+    tinygltf::Model model;
+    std::string error, warning;
+    const auto* data = reinterpret_cast<const unsigned char*>(bytes.data());
+    // the image is not a real PNG: tinygltf is not to decode it
+    loader.SetImageLoader([](tinygltf::Image*, const int, std::string*, std::string*, int, int,
+                             const unsigned char*, int, void*) { return true; }, nullptr);
+    const bool loaded = binary ? loader.LoadBinaryFromMemory(&model, &error, &warning, data,
+                                                             static_cast<unsigned>(bytes.size()))
+                               : loader.LoadASCIIFromString(
+                                     &model, &error, &warning, reinterpret_cast<const char*>(data),
+                                     static_cast<unsigned>(bytes.size()), "");
+    ASSERT_TRUE(loaded) << error;
+    ASSERT_EQ(model.images.size(), 1u);
+    EXPECT_EQ(model.images[0].mimeType, "image/png");
+    const tinygltf::BufferView& view = model.bufferViews[static_cast<std::size_t>(model.images[0].bufferView)];
+    EXPECT_EQ(std::string(reinterpret_cast<const char*>(model.buffers[0].data.data()) + view.byteOffset,
+                          view.byteLength),
+              png);
+    ASSERT_EQ(model.materials.size(), 1u);
+    EXPECT_EQ(model.materials[0].pbrMetallicRoughness.baseColorTexture.index, 0);
+    EXPECT_EQ(model.materials[0].pbrMetallicRoughness.metallicFactor, 0.0);
+    ASSERT_EQ(model.textures.size(), 1u);
+    EXPECT_EQ(model.textures[0].source, 0);
+    EXPECT_EQ(model.meshes[0].primitives[0].material, 0);
+    EXPECT_EQ(model.meshes[1].primitives[0].material, -1);  // no UVs to index the image
+    // and the meshes come back as they went in, but for v's rounding in 1 - v (v < 0.5: half a
+    // float step of 1 - v, 2^-25)
+    Result<std::vector<NodeMesh>> back = decode_gltf(bytes, "textured");
+    ASSERT_TRUE(back.ok()) << back.status().message();
+    const std::vector<float>& expected = meshes[0].vertices;
+    const std::vector<float>& decoded = back.value()[0].vertices;
+    ASSERT_EQ(decoded.size(), expected.size());
+    for (std::size_t i = 0; i < expected.size(); ++i)
+      if (i % 11 == 10) {
+        EXPECT_NEAR(decoded[i], expected[i], 0x1p-25) << i;
+      } else {
+        EXPECT_EQ(decoded[i], expected[i]) << i;
+      }
+  }
+  // only the image types glTF's core embeds
+  const std::filesystem::path tga = dir.path() / "stone.tga";
+  std::ofstream(tga, std::ios::binary) << std::string("\0\0\2\0 a targa header", 19);
+  Result<GltfTexture> refused = read_gltf_texture(tga);
+  EXPECT_EQ(refused.status().code(), ErrorCode::unsupported);
+  EXPECT_EQ(refused.status().message(), tga.string() + ": not a PNG or JPEG image, the types glTF 2.0 embeds");
+  EXPECT_EQ(read_gltf_texture(dir.path() / "missing.png").status().code(), ErrorCode::io);
 }
 
 // --- Draco -------------------------------------------------------------------------------------
@@ -902,6 +979,55 @@ TEST(GltfExport, ReportsUsageAndMissingTreeErrors) {
 
 // A tree baked from an empty mesh (a root without LODs): export refuses it as extract does
 // (bad input, exit 2) and writes nothing.
+// A tree's texture: export embeds it as the meshes' material, extract names it in a TextureFile
+// comment relative to the cut; an image glTF cannot embed leaves the export untextured, not failed.
+TEST(GltfExport, TheTreesTextureGoesIntoTheGltfAndIsNamedByTheExtractedPly) {
+  if (std::getenv("OCTOLOD_CLI") == nullptr) GTEST_SKIP() << "OCTOLOD_CLI not set";
+  TempDir dir;
+  const std::filesystem::path tree = dir.path() / "tree";
+  write_tree(tree);
+  Result<Manifest> manifest = read_tree_manifest(tree);
+  ASSERT_TRUE(manifest.ok()) << manifest.status().message();
+  manifest->texture = "texture/stone.jpg";
+  ASSERT_TRUE(write_manifest(tree / std::string(kManifestFileName), manifest.value()).ok());
+  std::filesystem::create_directories(tree / "texture");
+  const std::string jpeg = "\xFF\xD8\xFF\xE0 a JPEG's bytes";
+  std::ofstream(tree / "texture/stone.jpg", std::ios::binary) << jpeg;
+
+  const std::filesystem::path glb = dir.path() / "cut.glb";
+  const auto [code, text] = run_cli("--json export " + tree.string() + " --level 1 -o " + glb.string());
+  ASSERT_EQ(code, 0);
+  EXPECT_EQ(json::parse(text)["texture"], "stone.jpg");
+  std::ifstream in(glb, std::ios::binary);
+  std::vector<char> raw((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::span<const std::byte> bytes(reinterpret_cast<const std::byte*>(raw.data()), raw.size());
+  const json document = glb_json(bytes);
+  ASSERT_EQ(document["images"].size(), 1u);
+  EXPECT_EQ(document["images"][0]["mimeType"], "image/jpeg");
+  const json& view = document["bufferViews"][document["images"][0]["bufferView"].get<std::size_t>()];
+  const std::vector<std::byte> bin = glb_bin(bytes);
+  EXPECT_EQ(std::string(reinterpret_cast<const char*>(bin.data()) + view.value("byteOffset", 0),
+                        view["byteLength"].get<std::size_t>()),
+            jpeg);
+  for (const json& mesh : document["meshes"]) EXPECT_EQ(mesh["primitives"][0]["material"], 0);
+
+  std::filesystem::create_directories(dir.path() / "cuts");
+  const std::filesystem::path ply = dir.path() / "cuts" / "cut.ply";
+  ASSERT_EQ(run_cli("extract " + tree.string() + " --level 1 -o " + ply.string()).first, 0);
+  std::ifstream header(ply, std::ios::binary);
+  std::string line;
+  std::vector<std::string> comments;
+  while (std::getline(header, line) && line != "end_header")
+    if (line.rfind("comment ", 0) == 0) comments.push_back(line);
+  EXPECT_EQ(comments, std::vector<std::string>{"comment TextureFile ../tree/texture/stone.jpg"});
+
+  // not an image glTF embeds: exported without it
+  std::ofstream(tree / "texture/stone.jpg", std::ios::binary | std::ios::trunc) << "BM a bitmap";
+  const auto [plain_code, plain_text] = run_cli("--json export " + tree.string() + " --level 1 -o " + glb.string());
+  ASSERT_EQ(plain_code, 0);
+  EXPECT_EQ(json::parse(plain_text)["texture"], "");
+}
+
 TEST(GltfExport, RefusesATreeWithoutNodeLodsLikeExtract) {
   if (std::getenv("OCTOLOD_CLI") == nullptr) GTEST_SKIP() << "OCTOLOD_CLI not set";
   TempDir dir;

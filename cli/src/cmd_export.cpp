@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "command.h"
@@ -39,6 +40,15 @@ int run_export(const ExportArgs& args, const CommandContext& context) {
   options.draco = args.draco;
   options.draco_options = args.draco_options;
   options.translation = manifest.origin;
+  // the tree's texture as the meshes' material: a tree whose image glTF cannot embed (not PNG
+  // or JPEG) or that lost it still exports, untextured, with a warning
+  if (!manifest.texture.empty() && manifest.layout.uv) {
+    Result<GltfTexture> texture = read_gltf_texture(root / manifest.texture);
+    if (texture.ok())
+      options.texture = std::move(texture).value();
+    else
+      warn(texture.status().message() + ": the glTF has no texture");
+  }
   std::uint64_t triangles = 0, vertices = 0;
   for (std::size_t i = 0; i < cut.size(); ++i) {
     options.names.push_back(mesh_name(manifest.nodes[cut[i].node], cut[i].lod));
@@ -58,6 +68,7 @@ int run_export(const ExportArgs& args, const CommandContext& context) {
     print_json({{"file", args.output},
                 {"format", options.binary ? "glb" : "gltf"},
                 {"draco", args.draco},
+                {"texture", options.texture ? options.texture->name : ""},
                 {"meshes", cut.size()},
                 {"triangles", triangles},
                 {"vertices", vertices},
@@ -65,10 +76,10 @@ int run_export(const ExportArgs& args, const CommandContext& context) {
                 {"bytes", bytes},
                 {"seconds", seconds}});
   } else {
-    std::printf("%s: %zu meshes, %llu triangles, max error %g, %.2f MB%s in %.2f s\n",
+    std::printf("%s: %zu meshes, %llu triangles, max error %g, %.2f MB%s%s in %.2f s\n",
                 args.output.c_str(), cut.size(), static_cast<unsigned long long>(triangles),
                 summary.max_error, static_cast<double>(bytes) / 1e6, args.draco ? " (Draco)" : "",
-                seconds);
+                options.texture ? (", texture " + options.texture->name).c_str() : "", seconds);
   }
   return 0;
 }

@@ -32,8 +32,14 @@ int run_extract(const ExtractArgs& args, const CommandContext& context) {
   progress.message("extract: " + std::to_string(cut.size()) + " node LODs");
   Result<NodeMesh> mesh = load_cut_mesh(root, manifest, cut);
   if (!mesh.ok()) return report(mesh.status());
-  const Status written =
-      write_mesh_file(args.output, mesh.value(), args.ascii, PlyColorType::uchar, manifest.origin);
+  // the tree's texture named relative to the cut, so that a viewer finds it
+  std::string texture;
+  if (!manifest.texture.empty() && manifest.layout.uv) {
+    const std::filesystem::path output_dir = std::filesystem::absolute(args.output).lexically_normal().parent_path();
+    texture = std::filesystem::absolute(root / manifest.texture).lexically_normal().lexically_relative(output_dir).generic_string();
+  }
+  const Status written = write_mesh_file(args.output, mesh.value(), args.ascii, PlyColorType::uchar,
+                                         manifest.origin, texture);
   if (!written.ok()) return report(written);
 
   const Result<std::uint64_t> written_bytes = written_file_size(args.output);
@@ -60,6 +66,7 @@ int run_extract(const ExtractArgs& args, const CommandContext& context) {
                 {"percent_of_input", percent},
                 {"max_error", summary.max_error},
                 {"layout", mesh->layout.describe()},
+                {"texture", texture},
                 {"bytes", bytes},
                 {"seconds", seconds}});
   } else {

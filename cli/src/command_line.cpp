@@ -65,7 +65,10 @@ void add_bake_command(CLI::App& app, CommandContext& context) {
   auto args = std::make_shared<BakeArgs>();
   CLI::App* command = app.add_subcommand(
       "bake", "Bake a PLY mesh into an on-disk LOD octree directory (bounded memory)");
-  command->add_option("input", args->input, "Input .ply file")->required();
+  command->add_option("input", args->input,
+                      "Input .ply file (UVs per vertex or per face corner; the image a 'comment TextureFile NAME' "
+                      "line names next to it is copied into the tree)")
+      ->required();
   command->add_option("-o,--output", args->output,
                       "Output directory (created; an earlier bake there is replaced atomically)")
       ->required();

@@ -31,12 +31,14 @@ Result<MeshFile> read_mesh_file(const std::filesystem::path& path,
 }
 
 Status write_mesh_file(const std::filesystem::path& path, const NodeMesh& mesh, bool ascii,
-                       PlyColorType color_type, const std::array<double, 3>& origin) {
+                       PlyColorType color_type, const std::array<double, 3>& origin,
+                       const std::string& texture) {
   PlyWriteOptions options;
   options.format = ascii ? PlyFormat::ascii : PlyFormat::binary_little_endian;
   options.layout = mesh.layout;
   options.color_type = color_type;
   if (origin != std::array<double, 3>{0.0, 0.0, 0.0}) options.position_origin = origin;
+  if (!texture.empty()) options.comments.push_back("TextureFile " + texture);
   return write_ply(path, options, mesh.vertices, mesh.indices);
 }
 

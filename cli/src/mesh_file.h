@@ -5,6 +5,7 @@
 #include <array>
 #include <filesystem>
 #include <optional>
+#include <string>
 
 #include "octolod/formats/node_file.h"
 #include "octolod/formats/ply.h"
@@ -32,9 +33,12 @@ Result<MeshFile> read_mesh_file(const std::filesystem::path& path,
 // Writes `mesh` atomically (PlyWriter: temporary sibling, then rename; nothing is left behind on
 // failure): binary little-endian, or ascii when `ascii`; colours stored as `color_type`. With a
 // non-zero `origin` (the mesh's positions are relative to it) positions are written as double
-// with it added back: the file is in the input's coordinates.
+// with it added back: the file is in the input's coordinates. A non-empty `texture` (the image
+// the UVs index, as a path relative to the file's directory) is named in a "comment TextureFile"
+// line, as MeshLab writes and reads it.
 Status write_mesh_file(const std::filesystem::path& path, const NodeMesh& mesh, bool ascii,
                        PlyColorType color_type = PlyColorType::uchar,
-                       const std::array<double, 3>& origin = {0.0, 0.0, 0.0});
+                       const std::array<double, 3>& origin = {0.0, 0.0, 0.0},
+                       const std::string& texture = "");
 
 }  // namespace octolod::cli

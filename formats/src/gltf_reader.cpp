@@ -17,6 +17,7 @@
 
 #include "byte_io.h"
 #include "draco_codec.h"
+#include "gltf_uv.h"
 #include "octolod/formats/gltf.h"
 #include "octolod/formats/input_file.h"
 
@@ -73,21 +74,6 @@ std::optional<std::vector<std::byte>> decode_base64(std::string_view text) {
   return out;
 }
 
-Result<std::vector<std::byte>> read_file(const std::filesystem::path& path) {
-  OCTOLOD_RETURN_IF_ERROR(check_input_file(path, "the glTF"));
-  std::FILE* f = std::fopen(path.c_str(), "rb");
-  if (!f) return io_error(path.string() + ": cannot open: " + std::strerror(errno));
-  std::vector<std::byte> bytes;
-  std::array<std::byte, 1 << 16> chunk;
-  std::size_t n;
-  while ((n = std::fread(chunk.data(), 1, chunk.size(), f)) > 0)
-    bytes.insert(bytes.end(), chunk.begin(), chunk.begin() + static_cast<std::ptrdiff_t>(n));
-  const bool failed = std::ferror(f) != 0;
-  std::fclose(f);
-  if (failed) return io_error(path.string() + ": read failed");
-  return bytes;
-}
-
 // Copies `mesh` into `layout` (a subset of its own), dropping the other attributes.
 NodeMesh restrict_layout(const NodeMesh& mesh, VertexLayout layout) {
   if (mesh.layout == layout) return mesh;
@@ -136,6 +122,7 @@ class GltfDecoder {
       Result<NodeMesh> mesh = read_mesh(gltf_meshes[i], "mesh " + std::to_string(i));
       if (!mesh.ok()) return mesh.status();
       meshes.push_back(std::move(mesh).value());
+      detail::flip_v(meshes.back());  // v up again (gltf_uv.h)
     }
     return meshes;
   }
@@ -294,7 +281,7 @@ class GltfDecoder {
     }
     if (base_dir_ == nullptr || uri.find("://") != std::string::npos)
       return unsupported(where + ": external buffer '" + uri + "' (only self-contained data here)");
-    Result<std::vector<std::byte>> bytes = read_file(*base_dir_ / uri);
+    Result<std::vector<std::byte>> bytes = read_input_file(*base_dir_ / uri, "the glTF");
     if (!bytes.ok())
       return Status(bytes.status().code(),
                     std::string(name_) + ": " + where + ": " + bytes.status().message());
@@ -586,7 +573,7 @@ Result<std::vector<NodeMesh>> decode_gltf(std::span<const std::byte> bytes, std:
 }
 
 Result<std::vector<NodeMesh>> read_gltf(const std::filesystem::path& path) {
-  Result<std::vector<std::byte>> bytes = read_file(path);
+  Result<std::vector<std::byte>> bytes = read_input_file(path, "the glTF");
   if (!bytes.ok()) return bytes.status();
   const std::filesystem::path base_dir = path.parent_path();
   const std::string name = path.string();

@@ -8,6 +8,7 @@
 #include <cerrno>
 #include <cstring>
 #include <exception>
+#include <initializer_list>
 #include <fstream>
 #include <limits>
 #include <sstream>
@@ -15,6 +16,8 @@
 #include <system_error>
 
 #include "draco_codec.h"
+#include "gltf_uv.h"
+#include "octolod/formats/input_file.h"
 #include "octolod/formats/gltf.h"
 #include "octolod/formats/output_file.h"
 
@@ -79,9 +82,26 @@ class ModelBuilder {
       model_.extensionsUsed.push_back(kDracoExtension);
       model_.extensionsRequired.push_back(kDracoExtension);
     }
+    if (options.texture) add_material(*options.texture);
   }
 
+  // `mesh` as glTF has it: with v turned down (gltf_uv.h).
   Status add(const NodeMesh& mesh, const std::string& name, const detail::DracoPositionGrid& grid) {
+    if (!mesh.layout.uv) return add_node(mesh, name, grid);
+    NodeMesh flipped = mesh;
+    detail::flip_v(flipped);
+    return add_node(flipped, name, grid);
+  }
+
+  tinygltf::Model finish() && {
+    if (model_.buffers[0].data.empty()) {
+      model_.buffers.clear();  // a buffer must not be empty (byteLength >= 1)
+    }
+    return std::move(model_);
+  }
+
+ private:
+  Status add_node(const NodeMesh& mesh, const std::string& name, const detail::DracoPositionGrid& grid) {
     tinygltf::Node node;
     node.name = name;
     if (options_.translation != std::array<double, 3>{0.0, 0.0, 0.0})
@@ -95,6 +115,7 @@ class ModelBuilder {
         OCTOLOD_RETURN_IF_ERROR(add_draco_primitive(mesh, name, grid, primitive));
       else
         add_plain_primitive(mesh, primitive);
+      if (mesh.layout.uv && !model_.materials.empty()) primitive.material = 0;
       gltf_mesh.primitives.push_back(std::move(primitive));
       node.mesh = static_cast<int>(model_.meshes.size());
       model_.meshes.push_back(std::move(gltf_mesh));
@@ -104,14 +125,29 @@ class ModelBuilder {
     return {};
   }
 
-  tinygltf::Model finish() && {
-    if (model_.buffers[0].data.empty()) {
-      model_.buffers.clear();  // a buffer must not be empty (byteLength >= 1)
-    }
-    return std::move(model_);
+  // Material 0: `texture` as the base colour (repeating, mipmapped), not metallic, as a scan's
+  // colour texture is meant.
+  void add_material(const GltfTexture& texture) {
+    tinygltf::Image image;
+    image.name = texture.name;
+    image.mimeType = texture.mime_type;
+    image.bufferView = add_view(texture.bytes.data(), texture.bytes.size(), 0, 0);
+    model_.images.push_back(std::move(image));
+    tinygltf::Sampler sampler;
+    sampler.magFilter = TINYGLTF_TEXTURE_FILTER_LINEAR;
+    sampler.minFilter = TINYGLTF_TEXTURE_FILTER_LINEAR_MIPMAP_LINEAR;
+    model_.samplers.push_back(sampler);
+    tinygltf::Texture gltf_texture;
+    gltf_texture.source = 0;
+    gltf_texture.sampler = 0;
+    model_.textures.push_back(gltf_texture);
+    tinygltf::Material material;
+    material.name = texture.name;
+    material.pbrMetallicRoughness.baseColorTexture.index = 0;
+    material.pbrMetallicRoughness.metallicFactor = 0.0;
+    model_.materials.push_back(std::move(material));
   }
 
- private:
   // Appends `bytes` 4-byte aligned (every component type and stride stays aligned); returns the
   // new buffer view's index.
   int add_view(const void* bytes, std::size_t size, std::size_t stride, int target) {
@@ -249,7 +285,7 @@ Status serialize(std::span<const NodeMesh> meshes, const GltfWriteOptions& optio
   }
   const detail::DracoPositionGrid grid = detail::DracoPositionGrid::enclosing(all);
 
-  ModelBuilder builder(options, options.draco ? 0 : plain_bytes);
+  ModelBuilder builder(options, (options.draco ? 0 : plain_bytes) + (options.texture ? options.texture->bytes.size() + 4 : 0));
   for (std::size_t i = 0; i < meshes.size(); ++i)
     OCTOLOD_RETURN_IF_ERROR(builder.add(meshes[i], names[i], grid));
   const tinygltf::Model model = std::move(builder).finish();
@@ -266,6 +302,26 @@ Status serialize(std::span<const NodeMesh> meshes, const GltfWriteOptions& optio
 }
 
 }  // namespace
+
+Result<GltfTexture> read_gltf_texture(const std::filesystem::path& path) {
+  auto bytes = read_input_file(path, "the texture");
+  if (!bytes.ok()) return bytes.status();
+  const auto starts_with = [&](std::initializer_list<unsigned char> magic) {
+    return bytes->size() >= magic.size() &&
+           std::equal(magic.begin(), magic.end(), bytes->begin(),
+                      [](unsigned char m, std::byte b) { return m == std::to_integer<unsigned char>(b); });
+  };
+  GltfTexture texture;
+  if (starts_with({0x89, 'P', 'N', 'G', '\r', '\n', 0x1A, '\n'}))
+    texture.mime_type = "image/png";
+  else if (starts_with({0xFF, 0xD8, 0xFF}))
+    texture.mime_type = "image/jpeg";
+  else
+    return unsupported_error(path.string() + ": not a PNG or JPEG image, the types glTF 2.0 embeds");
+  texture.name = path.filename().string();
+  texture.bytes = std::move(bytes).value();
+  return texture;
+}
 
 Result<std::vector<std::byte>> encode_gltf(std::span<const NodeMesh> meshes,
                                            const GltfWriteOptions& options) {

@@ -1,5 +1,9 @@
 #include "octolod/formats/input_file.h"
 
+#include <array>
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
 #include <string>
 #include <system_error>
 
@@ -15,6 +19,21 @@ Status check_input_file(const std::filesystem::path& path, std::string_view what
   if (status.type() != std::filesystem::file_type::regular)
     return io_error(cannot + "it is not a regular file (a device, FIFO or socket)");
   return {};
+}
+
+Result<std::vector<std::byte>> read_input_file(const std::filesystem::path& path, std::string_view what) {
+  OCTOLOD_RETURN_IF_ERROR(check_input_file(path, what));
+  std::FILE* f = std::fopen(path.c_str(), "rb");
+  if (!f) return io_error(path.string() + ": cannot open: " + std::strerror(errno));
+  std::vector<std::byte> bytes;
+  std::array<std::byte, 1 << 16> chunk;
+  std::size_t n;
+  while ((n = std::fread(chunk.data(), 1, chunk.size(), f)) > 0)
+    bytes.insert(bytes.end(), chunk.begin(), chunk.begin() + static_cast<std::ptrdiff_t>(n));
+  const bool failed = std::ferror(f) != 0;
+  std::fclose(f);
+  if (failed) return io_error(path.string() + ": read failed");
+  return bytes;
 }
 
 }  // namespace octolod

@@ -6,14 +6,19 @@
 // triangle primitive; attributes POSITION (vec3 float, with min/max), NORMAL (vec3 float),
 // COLOR_0 (vec3 float, linear 0..1), TEXCOORD_0 (vec2 float) as the mesh's VertexLayout has them;
 // indices uint16 when every vertex index fits below 65535, else uint32. Positions are in model
-// units; node transforms are identity but for GltfWriteOptions::translation. Without Draco the attribute values are copied bit-exactly
-// (one interleaved buffer view per mesh). A mesh without triangles becomes a node without a mesh.
+// units; node transforms are identity but for GltfWriteOptions::translation. Without Draco the
+// attribute values are copied bit-exactly (one interleaved buffer view per mesh), but for v:
+// glTF's texture space has v down, octolod's (as PLY's) v up, so TEXCOORD_0 is (u, 1 - v) and the
+// reader turns it back (exactly for v in [0.5, 2], else within half a float step of 1 - v). With GltfWriteOptions::texture, one material (the image as its base
+// colour, not metallic) on every primitive with TEXCOORD_0. A mesh without triangles becomes a
+// node without a mesh.
 #pragma once
 
 #include <array>
 #include <cstddef>
 #include <cstdint>
 #include <filesystem>
+#include <optional>
 #include <span>
 #include <string>
 #include <string_view>
@@ -45,6 +50,17 @@ struct DracoOptions {
   int compression_level = 7;
 };
 
+// An image to texture the exported meshes with (GltfWriteOptions::texture).
+struct GltfTexture {
+  std::string name;       // the image's name in the file (e.g. its file name)
+  std::string mime_type;  // "image/png" or "image/jpeg", the types glTF 2.0's core allows
+  std::vector<std::byte> bytes;  // the image file's bytes, embedded as they are
+};
+
+// Reads an image file for GltfWriteOptions::texture, named by its file name. unsupported unless
+// its bytes begin as a PNG's or a JPEG's do; io errors name the file.
+Result<GltfTexture> read_gltf_texture(const std::filesystem::path& path);
+
 struct GltfWriteOptions {
   // true: GLB (one binary file). false: .gltf JSON with the buffer embedded as a data URI
   // (about 4/3 larger; handy for diffing and debugging).
@@ -60,6 +76,10 @@ struct GltfWriteOptions {
   // Every node's translation (model units): where the meshes' (0, 0, 0) lies, e.g. a baked
   // tree's Manifest::origin; the positions stay float relative to it. Zeros: no translation.
   std::array<double, 3> translation{0.0, 0.0, 0.0};
+  // Embedded in the file's buffer (GLB: the BIN chunk; .gltf: its data URI) as the base colour
+  // texture of the primitives that have TEXCOORD_0: the image their UVs index, e.g. a baked tree's
+  // Manifest::texture. Empty: no material, no image.
+  std::optional<GltfTexture> texture;
 };
 
 // Encodes `meshes` into the bytes of a GLB file (options.binary) or a .gltf file. Errors:

@@ -24,6 +24,9 @@
 // Coordinates: cameras and the drawn meshes are in the tree's frame, model units relative to
 // manifest().origin (zeros unless the bake recentred double input positions); a game places the
 // tree at that point of its world (in double, or relative to its own floating origin).
+// Texture: manifest().texture, when not empty, is the image the meshes' UVs index (a path
+// relative to the tree's root, loaded by the game as it loads its images); v is up, (0, 0) at the
+// image's lower-left corner: flip it for an API whose image rows start at the top.
 //
 // Thread safety: a StreamingTree is used from one thread (the render thread); update() and the
 // accessors must not run concurrently. Loads run on the injected Executor and read through the
