@@ -278,22 +278,27 @@ TEST(Gltf, GlbHasMagicVersionTwoAndConsistentChunkLengths) {
 
 // An independent loader (the system tinygltf, which octolod only uses for writing) reads what
 // octolod writes, GLB and .gltf alike, with the structure the header promises.
+// Loads an encoded GLB (`binary`) or .gltf with tinygltf, images kept as their bytes (not decoded).
+bool load_with_tinygltf(const std::vector<std::byte>& bytes, bool binary, tinygltf::Model& model,
+                        std::string& error, std::string& warning) {
+  tinygltf::TinyGLTF loader;
+  loader.SetImageLoader([](tinygltf::Image*, const int, std::string*, std::string*, int, int,
+                           const unsigned char*, int, void*) { return true; }, nullptr);
+  const auto* data = reinterpret_cast<const unsigned char*>(bytes.data());
+  return binary ? loader.LoadBinaryFromMemory(&model, &error, &warning, data, static_cast<unsigned>(bytes.size()))
+                : loader.LoadASCIIFromString(&model, &error, &warning, reinterpret_cast<const char*>(data),
+                                             static_cast<unsigned>(bytes.size()), "");
+}
+
 TEST(Gltf, TinygltfLoadsTheWrittenFiles) {
   const std::vector<NodeMesh> meshes = {grid_mesh(6), quad_mesh({false, false, true})};
   for (bool binary : {true, false}) {
     GltfWriteOptions options = named({"a", "b"});
     options.binary = binary;
     const std::vector<std::byte> bytes = encode(meshes, options);
-    tinygltf::TinyGLTF loader;
     tinygltf::Model model;
     std::string error, warning;
-    const auto* data = reinterpret_cast<const unsigned char*>(bytes.data());
-    const bool loaded = binary ? loader.LoadBinaryFromMemory(&model, &error, &warning, data,
-                                                             static_cast<unsigned>(bytes.size()))
-                               : loader.LoadASCIIFromString(
-                                     &model, &error, &warning, reinterpret_cast<const char*>(data),
-                                     static_cast<unsigned>(bytes.size()), "");
-    ASSERT_TRUE(loaded) << error;
+    ASSERT_TRUE(load_with_tinygltf(bytes, binary, model, error, warning)) << error;
     EXPECT_TRUE(warning.empty()) << warning;
     ASSERT_EQ(model.meshes.size(), 2u);
     EXPECT_EQ(model.nodes[1].name, "b");
@@ -344,19 +349,9 @@ TEST(Gltf, TextureIsEmbeddedAsTheMaterialOfThePrimitivesWithUvs) {
     options.binary = binary;
     options.texture = texture.value();
     const std::vector<std::byte> bytes = encode(meshes, options);
-    tinygltf::TinyGLTF loader;
     tinygltf::Model model;
     std::string error, warning;
-    const auto* data = reinterpret_cast<const unsigned char*>(bytes.data());
-    // the image is not a real PNG: tinygltf is not to decode it
-    loader.SetImageLoader([](tinygltf::Image*, const int, std::string*, std::string*, int, int,
-                             const unsigned char*, int, void*) { return true; }, nullptr);
-    const bool loaded = binary ? loader.LoadBinaryFromMemory(&model, &error, &warning, data,
-                                                             static_cast<unsigned>(bytes.size()))
-                               : loader.LoadASCIIFromString(
-                                     &model, &error, &warning, reinterpret_cast<const char*>(data),
-                                     static_cast<unsigned>(bytes.size()), "");
-    ASSERT_TRUE(loaded) << error;
+    ASSERT_TRUE(load_with_tinygltf(bytes, binary, model, error, warning)) << error;
     ASSERT_EQ(model.images.size(), 1u);
     EXPECT_EQ(model.images[0].mimeType, "image/png");
     const tinygltf::BufferView& view = model.bufferViews[static_cast<std::size_t>(model.images[0].bufferView)];

@@ -151,55 +151,94 @@ TEST(PlyReader, StreamsInBatchesNoLargerThanTheBuffer) {
   }
 }
 
+// Every triangle batch (and its corner UVs, when the faces have them), read in the smallest
+// batches.
+struct TriangleStream {
+  std::vector<std::uint32_t> triangles;
+  std::vector<float> uvs;
+  int batches = 0;
+};
+TriangleStream stream_triangles(const std::filesystem::path& path) {
+  TriangleStream out;
+  auto reader = PlyReader::open(path, test::small_batches());
+  EXPECT_TRUE(reader.ok()) << reader.status().message();
+  if (!reader.ok()) return out;
+  for (;;) {
+    auto batch = reader.value()->next();
+    EXPECT_TRUE(batch.ok()) << batch.status().message();
+    if (!batch.ok() || batch->kind == PlyBatch::Kind::end) break;
+    if (batch->kind != PlyBatch::Kind::triangles) continue;
+    EXPECT_EQ(batch->first, out.triangles.size() / 3);
+    EXPECT_EQ(batch->corner_uvs.size(), reader.value()->info().corner_uvs ? 2 * batch->triangles.size() : 0);
+    out.triangles.insert(out.triangles.end(), batch->triangles.begin(), batch->triangles.end());
+    out.uvs.insert(out.uvs.end(), batch->corner_uvs.begin(), batch->corner_uvs.end());
+    ++out.batches;
+  }
+  return out;
+}
+
+// One polygon of `sides` vertices (vertex i at (i, i + 1, i + 2)), corner k on vertex 7k mod
+// sides, and with `corner_uvs` corner k's texture coordinates (k, -k / 2).
+std::string polygon_ply(PlyFormat format, std::uint32_t sides, bool corner_uvs) {
+  const bool binary = format != PlyFormat::ascii;
+  const bool big = format == PlyFormat::binary_big_endian;
+  std::string text = "ply\nformat " + std::string(to_string(format)) + " 1.0\nelement vertex " +
+                     std::to_string(sides) + "\nproperty float x\nproperty float y\nproperty float z\n"
+                     "element face 1\nproperty list ushort uint vertex_indices\n" +
+                     (corner_uvs ? "property list ushort double texcoord\n" : "") + "end_header\n";
+  for (std::uint32_t i = 0; i < sides; ++i) {
+    if (binary) {
+      for (std::uint32_t k = 0; k < 3; ++k) append_scalar(text, static_cast<float>(i + k), big);
+    } else {
+      text += std::to_string(i) + " " + std::to_string(i + 1) + " " + std::to_string(i + 2) + "\n";
+    }
+  }
+  if (binary) {
+    append_scalar(text, static_cast<std::uint16_t>(sides), big);
+    for (std::uint32_t i = 0; i < sides; ++i) append_scalar(text, (i * 7) % sides, big);
+    if (corner_uvs) {
+      append_scalar(text, static_cast<std::uint16_t>(2 * sides), big);
+      for (std::uint32_t i = 0; i < sides; ++i) {
+        append_scalar(text, static_cast<double>(i), big);
+        append_scalar(text, -0.5 * i, big);
+      }
+    }
+  } else {
+    text += std::to_string(sides);
+    for (std::uint32_t i = 0; i < sides; ++i) text += " " + std::to_string((i * 7) % sides);
+    if (corner_uvs) {
+      text += " " + std::to_string(2 * sides);
+      for (std::uint32_t i = 0; i < sides; ++i) text += " " + std::to_string(i) + " " + std::to_string(-0.5 * i);
+    }
+    text += "\n";
+  }
+  return text;
+}
+
 // A 2000-gon fans into 1998 triangles, more than one 4 KiB batch holds (341): the fan must
-// continue across batches with the same centre.
+// continue across batches with the same centre, with its corners' UVs when the faces have them
+// (texcoord), in every format.
 TEST(PlyReader, HugePolygonFanSpansBatches) {
   ScratchDir dir;
   constexpr std::uint32_t kSides = 2000;
-  for (PlyFormat format : kFormats) {
-    SCOPED_TRACE(std::string(to_string(format)));
-    const bool binary = format != PlyFormat::ascii;
-    const bool big = format == PlyFormat::binary_big_endian;
-    std::string text = "ply\nformat " + std::string(to_string(format)) +
-                       " 1.0\nelement vertex " + std::to_string(kSides) +
-                       "\nproperty float x\nproperty float y\nproperty float z\n"
-                       "element face 1\nproperty list ushort uint vertex_indices\nend_header\n";
-    for (std::uint32_t i = 0; i < kSides; ++i) {
-      if (binary) {
-        for (std::uint32_t k = 0; k < 3; ++k) append_scalar(text, static_cast<float>(i + k), big);
-      } else {
-        text += std::to_string(i) + " " + std::to_string(i + 1) + " " + std::to_string(i + 2) + "\n";
+  for (const bool corner_uvs : {false, true}) {
+    for (PlyFormat format : kFormats) {
+      SCOPED_TRACE(std::string(to_string(format)) + (corner_uvs ? " corner uvs" : ""));
+      const auto path = dir.file("polygon.ply");
+      write_bytes(path, polygon_ply(format, kSides, corner_uvs));
+      const TriangleStream stream = stream_triangles(path);
+      EXPECT_EQ(stream.batches, (1998 + 340) / 341);
+      ASSERT_EQ(stream.triangles.size(), 3u * 1998);
+      ASSERT_EQ(stream.uvs.size(), corner_uvs ? 6u * 1998 : 0u);
+      for (std::uint32_t t = 0; t < 1998; ++t) {
+        const std::uint32_t corners[3] = {0, t + 1, t + 2};
+        for (std::uint32_t c = 0; c < 3; ++c) {
+          ASSERT_EQ(stream.triangles[3 * t + c], (corners[c] * 7) % kSides) << t;
+          if (!corner_uvs) continue;
+          ASSERT_EQ(stream.uvs[6 * t + 2 * c], static_cast<float>(corners[c])) << t;
+          ASSERT_EQ(stream.uvs[6 * t + 2 * c + 1], static_cast<float>(-0.5 * corners[c])) << t;
+        }
       }
-    }
-    if (binary) {
-      append_scalar(text, static_cast<std::uint16_t>(kSides), big);
-      for (std::uint32_t i = 0; i < kSides; ++i) append_scalar(text, (i * 7) % kSides, big);
-    } else {
-      text += std::to_string(kSides);
-      for (std::uint32_t i = 0; i < kSides; ++i) text += " " + std::to_string((i * 7) % kSides);
-      text += "\n";
-    }
-    const auto path = dir.file("polygon.ply");
-    write_bytes(path, text);
-    auto reader = PlyReader::open(path, test::small_batches());
-    ASSERT_TRUE(reader.ok()) << reader.status().message();
-    std::vector<std::uint32_t> triangles;
-    int batches = 0;
-    for (;;) {
-      auto batch = reader.value()->next();
-      ASSERT_TRUE(batch.ok()) << batch.status().message();
-      if (batch->kind == PlyBatch::Kind::end) break;
-      if (batch->kind != PlyBatch::Kind::triangles) continue;
-      EXPECT_EQ(batch->first, triangles.size() / 3);
-      triangles.insert(triangles.end(), batch->triangles.begin(), batch->triangles.end());
-      ++batches;
-    }
-    EXPECT_EQ(batches, (1998 + 340) / 341);
-    ASSERT_EQ(triangles.size(), 3u * 1998);
-    for (std::uint32_t t = 0; t < 1998; ++t) {
-      EXPECT_EQ(triangles[3 * t], 0u);
-      EXPECT_EQ(triangles[3 * t + 1], ((t + 1) * 7) % kSides);
-      EXPECT_EQ(triangles[3 * t + 2], ((t + 2) * 7) % kSides);
     }
   }
 }
@@ -228,33 +267,6 @@ TEST(PlyReader, FacesBeforeVerticesAndPolygonsFanTriangulated) {
 
 // ---- texture coordinates per face corner (texcoord) ----
 
-// Every triangle batch and its corner UVs, read in the smallest batches.
-struct CornerUvStream {
-  std::vector<std::uint32_t> triangles;
-  std::vector<float> uvs;
-  int batches = 0;
-};
-CornerUvStream stream_corner_uvs(const std::filesystem::path& path) {
-  CornerUvStream out;
-  auto reader = PlyReader::open(path, test::small_batches());
-  EXPECT_TRUE(reader.ok()) << reader.status().message();
-  if (!reader.ok()) return out;
-  EXPECT_TRUE(reader.value()->info().corner_uvs);
-  EXPECT_TRUE(reader.value()->info().layout.uv);
-  for (;;) {
-    auto batch = reader.value()->next();
-    EXPECT_TRUE(batch.ok()) << batch.status().message();
-    if (!batch.ok() || batch->kind == PlyBatch::Kind::end) break;
-    if (batch->kind != PlyBatch::Kind::triangles) continue;
-    EXPECT_EQ(batch->first, out.triangles.size() / 3);
-    EXPECT_EQ(batch->corner_uvs.size(), 2 * batch->triangles.size());
-    out.triangles.insert(out.triangles.end(), batch->triangles.begin(), batch->triangles.end());
-    out.uvs.insert(out.uvs.end(), batch->corner_uvs.begin(), batch->corner_uvs.end());
-    ++out.batches;
-  }
-  return out;
-}
-
 //   3---2      quad 0 1 2 3 (its texcoord before its indices) -> (0 1 2) (0 2 3)
 //   |   |      triangle 1 4 2, whose corner at 2 has another (u, v): a seam
 //   0---1  4
@@ -268,7 +280,7 @@ TEST(PlyReader, CornerUvsComeWithTheirTrianglesAndReadPlyMakesWedges) {
               "property list uchar int vertex_indices\nend_header\n"
               "0 0 0\n1 0 0\n1 1 0\n0 1 0\n2 0 0\n"
               "8 0 0 1 0 1 1 0 1 7 4 0 1 2 3\n6 1 0 0.5 0 0.9 1 7 3 1 4 2\n");
-  const CornerUvStream stream = stream_corner_uvs(path);
+  const TriangleStream stream = stream_triangles(path);
   EXPECT_EQ(stream.triangles, (std::vector<std::uint32_t>{0, 1, 2, 0, 2, 3, 1, 4, 2}));
   EXPECT_EQ(stream.uvs, (std::vector<float>{0, 0, 1, 0, 1, 1, 0, 0, 1, 1, 0, 1, 1, 0, 0.5f, 0, 0.9f, 1}));
 
@@ -280,58 +292,6 @@ TEST(PlyReader, CornerUvsComeWithTheirTrianglesAndReadPlyMakesWedges) {
   EXPECT_EQ(mesh.triangles, (std::vector<std::uint32_t>{0, 1, 2, 0, 2, 3, 1, 4, 5}));
   EXPECT_EQ(mesh.vertices, (std::vector<float>{0, 0, 0, 0, 0, 1, 0, 0, 1, 0, 1, 1, 0, 1, 1, 0, 1, 0, 0, 1,
                                                2, 0, 0, 0.5f, 0, 1, 1, 0, 0.9f, 1}));
-}
-
-// A 2000-sided polygon with corner UVs fans out over several batches, each triangle with its
-// corners' (u, v), in every format.
-TEST(PlyReader, CornerUvsOfAHugePolygonSpanBatches) {
-  ScratchDir dir;
-  constexpr std::uint32_t kSides = 2000;
-  for (PlyFormat format : kFormats) {
-    SCOPED_TRACE(std::string(to_string(format)));
-    const bool binary = format != PlyFormat::ascii;
-    const bool big = format == PlyFormat::binary_big_endian;
-    std::string text = "ply\nformat " + std::string(to_string(format)) + " 1.0\nelement vertex " +
-                       std::to_string(kSides) + "\nproperty float x\nproperty float y\nproperty float z\n"
-                       "element face 1\nproperty list ushort uint vertex_indices\n"
-                       "property list ushort double texcoord\nend_header\n";
-    for (std::uint32_t i = 0; i < kSides; ++i) {
-      if (binary) {
-        for (std::uint32_t k = 0; k < 3; ++k) append_scalar(text, static_cast<float>(i + k), big);
-      } else {
-        text += std::to_string(i) + " " + std::to_string(i + 1) + " " + std::to_string(i + 2) + "\n";
-      }
-    }
-    if (binary) {
-      append_scalar(text, static_cast<std::uint16_t>(kSides), big);
-      for (std::uint32_t i = 0; i < kSides; ++i) append_scalar(text, (i * 7) % kSides, big);
-      append_scalar(text, static_cast<std::uint16_t>(2 * kSides), big);
-      for (std::uint32_t i = 0; i < kSides; ++i) {
-        append_scalar(text, static_cast<double>(i), big);
-        append_scalar(text, -0.5 * i, big);
-      }
-    } else {
-      text += std::to_string(kSides);
-      for (std::uint32_t i = 0; i < kSides; ++i) text += " " + std::to_string((i * 7) % kSides);
-      text += " " + std::to_string(2 * kSides);
-      for (std::uint32_t i = 0; i < kSides; ++i) text += " " + std::to_string(i) + " " + std::to_string(-0.5 * i);
-      text += "\n";
-    }
-    const auto path = dir.file("polygon.ply");
-    write_bytes(path, text);
-    const CornerUvStream stream = stream_corner_uvs(path);
-    EXPECT_EQ(stream.batches, (1998 + 340) / 341);
-    ASSERT_EQ(stream.triangles.size(), 3u * 1998);
-    ASSERT_EQ(stream.uvs.size(), 6u * 1998);
-    for (std::uint32_t t = 0; t < 1998; ++t) {
-      const std::uint32_t corners[3] = {0, t + 1, t + 2};
-      for (std::uint32_t c = 0; c < 3; ++c) {
-        ASSERT_EQ(stream.triangles[3 * t + c], (corners[c] * 7) % kSides) << t;
-        ASSERT_EQ(stream.uvs[6 * t + 2 * c], static_cast<float>(corners[c])) << t;
-        ASSERT_EQ(stream.uvs[6 * t + 2 * c + 1], static_cast<float>(-0.5 * corners[c])) << t;
-      }
-    }
-  }
 }
 
 // The image a textured mesh's UVs index: the first "comment TextureFile <name>", the keyword in
