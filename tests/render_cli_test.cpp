@@ -22,6 +22,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "image.h"
 #include "offscreen_renderer.h"
 #include "runtime_test_helpers.h"
 
@@ -237,6 +238,49 @@ TEST_F(RenderCli, BakedRockIsDrawnAndEveryDrawnTriangleIsCounted) {
     }
   EXPECT_GT(lit, picture.width * picture.height / 10);
   EXPECT_EQ(border, 0);
+  std::filesystem::remove_all(dir);
+}
+
+// render --texture draws the tree's texture instead of the detail tints: a rock whose PLY names a
+// texture red where u < 1/6 and blue beyond (the framed side shows u from about 0.8 round to
+// 0.35) shows only those two hues, and both. A tree without a
+// texture is a usage error, with no picture.
+TEST_F(RenderCli, TextureFlagDrawsTheTreesTextureInsteadOfTheTints) {
+  const auto dir = scratch_dir("texture");
+  const std::string ply = (dir / "rock.ply").string();
+  ASSERT_EQ(octolod("sample --shape rock --triangles 20000 -o " + ply, dir).exit_code, 0);
+  std::ifstream in(ply, std::ios::binary);
+  std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  bytes.insert(bytes.find('\n', bytes.find("format")) + 1, "comment TextureFile halves.png\n");
+  std::ofstream(dir / "textured.ply", std::ios::binary) << bytes;
+  Image halves(60, 32, 0x0000ff);
+  for (int y = 0; y < 32; ++y)
+    for (int x = 0; x < 10; ++x) halves.set(x, y, 0xff0000);
+  ASSERT_TRUE(write_png(dir / "halves.png", halves).ok());
+  ASSERT_EQ(octolod("bake " + (dir / "textured.ply").string() + " -o " + (dir / "rock").string(), dir).exit_code, 0);
+
+  const auto png = dir / "textured.png";
+  const CliRun run =
+      octolod("--json render " + (dir / "rock").string() + " --texture --width 320 --height 240 -o " + png.string(), dir);
+  ASSERT_EQ(run.exit_code, 0);
+  EXPECT_TRUE(run.json.at("texture").get<bool>());
+  // red, blue, their blends where the texels meet (magenta, 255-345 degrees), nothing between
+  // red and blue the other way round (the tints' and the rock's colours: brown, yellow, green)
+  int red = 0, blue = 0, lit = 0, unlike_the_texture = 0;
+  for (double hue : lit_hues(read_png(png))) {
+    ++lit;
+    if (hue < 15 || hue > 345) ++red;
+    else if (std::abs(hue - 240) < 15) ++blue;
+    else if (hue < 225) ++unlike_the_texture;
+  }
+  EXPECT_GT(red, 1000);
+  EXPECT_GT(blue, 1000);
+  EXPECT_LT(unlike_the_texture, lit / 100);
+
+  ASSERT_EQ(octolod("bake " + ply + " -o " + (dir / "plain").string(), dir).exit_code, 0);
+  const auto refused = dir / "refused.png";
+  EXPECT_EQ(octolod("render " + (dir / "plain").string() + " --texture -o " + refused.string(), dir).exit_code, 1);
+  EXPECT_FALSE(std::filesystem::exists(refused));
   std::filesystem::remove_all(dir);
 }
 

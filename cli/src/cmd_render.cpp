@@ -5,9 +5,12 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <memory>
+#include <optional>
 #include <sstream>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <glm/glm.hpp>
@@ -18,6 +21,7 @@
 #include "offscreen_renderer.h"
 #include "octolod/runtime/streaming_tree.h"
 #include "streaming_setup.h"
+#include "texture_image.h"
 #include "view_camera.h"
 
 namespace octolod::cli {
@@ -80,6 +84,16 @@ int run_render(const RenderArgs& args, const CommandContext& context) {
       runtime::StreamingTree::open_directory(args.tree, executor, options);
   if (!opened.ok()) return report(opened.status());
   runtime::StreamingTree& tree = *opened.value();
+  std::optional<Image> texture;
+  if (args.texture) {
+    const Manifest& manifest = tree.manifest();
+    if (manifest.texture.empty() || !manifest.layout.uv)
+      return report(usage_error("--texture: " + args.tree + " has no texture (its input's PLY named none in a "
+                                "TextureFile comment, or it has no UVs)"));
+    Result<Image> decoded = read_texture_image(std::filesystem::path(args.tree) / manifest.texture);
+    if (!decoded.ok()) return report(decoded.status());
+    texture = std::move(decoded).value();
+  }
 
   Lens lens;
   lens.fovy_radians = static_cast<float>(args.fov_degrees * 3.14159265358979 / 180.0);
@@ -111,7 +125,8 @@ int run_render(const RenderArgs& args, const CommandContext& context) {
 
   // picture
   const FramePainter painter(tree.manifest());
-  Result<Image> image = painter.paint(*frame, camera.value(), args.width, args.height, args.cull_back_faces);
+  Result<Image> image = painter.paint(*frame, camera.value(), args.width, args.height, args.cull_back_faces,
+                                      texture ? &texture.value() : nullptr);
   if (!image.ok()) return report(image.status());
   const Status written = write_png(args.output, image.value());
   if (!written.ok()) return report(written);
@@ -144,6 +159,7 @@ int run_render(const RenderArgs& args, const CommandContext& context) {
                 {"eye", {eye.x, eye.y, eye.z}},
                 {"fov_degrees", args.ortho ? nlohmann::json() : nlohmann::json(args.fov_degrees)},
                 {"orthographic", args.ortho},
+                {"texture", args.texture},
                 {"view_height", args.ortho ? nlohmann::json(lens.ortho_height) : nlohmann::json()},
                 {"target_sse_pixels", args.sse},
                 {"budget_bytes", options.max_resident_bytes},

@@ -21,11 +21,16 @@ std::uint32_t FramePainter::detail_level(const runtime::DrawItem& draw) const {
 }
 
 Result<Image> FramePainter::paint(const runtime::FrameResult& frame, const runtime::Camera& camera, int width,
-                                  int height, bool cull_back_faces) const {
+                                  int height, bool cull_back_faces, const Image* texture) const {
   std::vector<RenderItem> items;
   items.reserve(frame.draws.size());
-  for (const runtime::DrawItem& draw : frame.draws)
-    if (draw.mesh) items.push_back({draw.mesh.get(), lod_tint(detail_level(draw))});
+  for (const runtime::DrawItem& draw : frame.draws) {
+    if (!draw.mesh) continue;
+    if (texture != nullptr && draw.mesh->layout.uv)
+      items.push_back({.mesh = draw.mesh.get(), .tint_share = 0.0f, .texture = texture});
+    else
+      items.push_back({.mesh = draw.mesh.get(), .tint = lod_tint(detail_level(draw))});
+  }
   RenderView view;
   view.view = camera.view;
   view.projection = camera.projection;

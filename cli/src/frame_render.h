@@ -27,10 +27,11 @@ class FramePainter {
   std::uint32_t detail_level(const runtime::DrawItem& draw) const;
 
   // Renders `frame.draws` as seen by `camera` into a width x height picture (pixels), back faces
-  // culled when `cull_back_faces` (RenderView). The camera's projection should have aspect width /
+  // culled when `cull_back_faces` (RenderView). With a `texture` (the tree's, decoded) the nodes
+  // with UVs show it instead of their tints. The camera's projection should have aspect width /
   // height. Fails (ErrorCode::unsupported) only when no OpenGL context can be created.
   Result<Image> paint(const runtime::FrameResult& frame, const runtime::Camera& camera, int width, int height,
-                      bool cull_back_faces = false) const;
+                      bool cull_back_faces = false, const Image* texture = nullptr) const;
 
  private:
   std::vector<std::uint32_t> height_;  // per manifest node

@@ -12,6 +12,7 @@
 #include <GL/gl.h>
 
 #include <array>
+#include <map>
 #include <memory>
 #include <string>
 #include <vector>
@@ -45,6 +46,14 @@ struct OsMesa {
   decltype(&::glColorPointer) ColorPointer = nullptr;
   decltype(&::glDrawArrays) DrawArrays = nullptr;
   decltype(&::glFinish) Finish = nullptr;
+  decltype(&::glDisable) Disable = nullptr;
+  decltype(&::glDisableClientState) DisableClientState = nullptr;
+  decltype(&::glGenTextures) GenTextures = nullptr;
+  decltype(&::glBindTexture) BindTexture = nullptr;
+  decltype(&::glTexParameteri) TexParameteri = nullptr;
+  decltype(&::glTexImage2D) TexImage2D = nullptr;
+  decltype(&::glTexEnvi) TexEnvi = nullptr;
+  decltype(&::glTexCoordPointer) TexCoordPointer = nullptr;
   std::string error;  // non-empty when the library or a symbol is missing
 };
 
@@ -84,6 +93,14 @@ OsMesa load_osmesa() {
   resolve(library, "glColorPointer", api.ColorPointer, e);
   resolve(library, "glDrawArrays", api.DrawArrays, e);
   resolve(library, "glFinish", api.Finish, e);
+  resolve(library, "glDisable", api.Disable, e);
+  resolve(library, "glDisableClientState", api.DisableClientState, e);
+  resolve(library, "glGenTextures", api.GenTextures, e);
+  resolve(library, "glBindTexture", api.BindTexture, e);
+  resolve(library, "glTexParameteri", api.TexParameteri, e);
+  resolve(library, "glTexImage2D", api.TexImage2D, e);
+  resolve(library, "glTexEnvi", api.TexEnvi, e);
+  resolve(library, "glTexCoordPointer", api.TexCoordPointer, e);
   return api;
 }
 
@@ -92,13 +109,14 @@ const OsMesa& osmesa() {
   return api;
 }
 
-// Expands an indexed NodeMesh into flat arrays of position, normal and colour per corner, so
-// meshes without normals still shade (face normals) and colours can be tinted per node.
+// Expands an indexed NodeMesh into flat arrays of position, normal and colour (and with a texture
+// UV) per corner, so meshes without normals still shade (face normals) and colours can be tinted
+// per node.
 struct DrawArrays {
-  std::vector<float> positions, normals, colors;
+  std::vector<float> positions, normals, colors, uvs;
 };
 
-DrawArrays expand(const NodeMesh& mesh, glm::vec3 tint, float tint_share) {
+DrawArrays expand(const NodeMesh& mesh, glm::vec3 tint, float tint_share, bool textured) {
   DrawArrays out;
   const std::size_t stride = mesh.layout.floats();
   const std::size_t corners = mesh.indices.size();
@@ -116,14 +134,50 @@ DrawArrays expand(const NodeMesh& mesh, glm::vec3 tint, float tint_share) {
       out.positions.insert(out.positions.end(), v[k], v[k] + 3);
       glm::vec3 n = mesh.layout.normal ? glm::make_vec3(v[k] + VertexLayout::normal_offset()) : face;
       out.normals.insert(out.normals.end(), {n.x, n.y, n.z});
-      glm::vec3 base = mesh.layout.color ? glm::make_vec3(v[k] + mesh.layout.color_offset())
-                                         : glm::vec3(0.8f);
+      glm::vec3 base = textured           ? glm::vec3(1.0f)
+                       : mesh.layout.color ? glm::make_vec3(v[k] + mesh.layout.color_offset())
+                                           : glm::vec3(0.8f);
+      if (textured) out.uvs.insert(out.uvs.end(), v[k] + mesh.layout.uv_offset(), v[k] + mesh.layout.uv_offset() + 2);
       glm::vec3 c = (1.0f - tint_share) * base + tint_share * tint;
       out.colors.insert(out.colors.end(), {c.x, c.y, c.z});
     }
   }
   return out;
 }
+
+// The textures of one render, each image uploaded once: its rows bottom first, since OpenGL's
+// t = 0 is the first row it is given and a mesh's v = 0 is the image's bottom row. Modulated by the
+// lit surface colour, repeating, linearly filtered. The textures go with the context.
+class TextureUploads {
+ public:
+  explicit TextureUploads(const OsMesa& gl) : gl_(gl) {}
+
+  void bind(const Image& image) {
+    auto [it, added] = names_.try_emplace(&image, 0u);
+    if (added) {
+      gl_.GenTextures(1, &it->second);
+      gl_.BindTexture(GL_TEXTURE_2D, it->second);
+      gl_.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+      gl_.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+      gl_.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_REPEAT);
+      gl_.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_REPEAT);
+      const std::size_t row = static_cast<std::size_t>(image.width) * 4;
+      std::vector<std::uint8_t> bottom_first(image.rgba.size());
+      for (int y = 0; y < image.height; ++y)
+        std::copy_n(image.rgba.data() + static_cast<std::size_t>(image.height - 1 - y) * row, row,
+                    bottom_first.data() + static_cast<std::size_t>(y) * row);
+      gl_.TexImage2D(GL_TEXTURE_2D, 0, GL_RGBA, image.width, image.height, 0, GL_RGBA, GL_UNSIGNED_BYTE,
+                     bottom_first.data());
+    }
+    gl_.BindTexture(GL_TEXTURE_2D, it->second);
+    gl_.TexEnvi(GL_TEXTURE_ENV, GL_TEXTURE_ENV_MODE, GL_MODULATE);
+    gl_.Enable(GL_TEXTURE_2D);
+  }
+
+ private:
+  const OsMesa& gl_;
+  std::map<const Image*, GLuint> names_;
+};
 
 }  // namespace
 
@@ -177,12 +231,23 @@ Result<Image> render_offscreen(std::span<const RenderItem> items, const RenderVi
   gl.EnableClientState(GL_VERTEX_ARRAY);
   gl.EnableClientState(GL_NORMAL_ARRAY);
   gl.EnableClientState(GL_COLOR_ARRAY);
+  TextureUploads textures(gl);
   for (const RenderItem& item : items) {
-    DrawArrays arrays = expand(*item.mesh, item.tint, item.tint_share);
+    const bool textured = item.texture != nullptr && item.mesh->layout.uv;
+    DrawArrays arrays = expand(*item.mesh, item.tint, item.tint_share, textured);
     gl.VertexPointer(3, GL_FLOAT, 0, arrays.positions.data());
     gl.NormalPointer(GL_FLOAT, 0, arrays.normals.data());
     gl.ColorPointer(3, GL_FLOAT, 0, arrays.colors.data());
+    if (textured) {
+      textures.bind(*item.texture);
+      gl.EnableClientState(GL_TEXTURE_COORD_ARRAY);
+      gl.TexCoordPointer(2, GL_FLOAT, 0, arrays.uvs.data());
+    }
     gl.DrawArrays(GL_TRIANGLES, 0, static_cast<GLsizei>(arrays.positions.size() / 3));
+    if (textured) {
+      gl.DisableClientState(GL_TEXTURE_COORD_ARRAY);
+      gl.Disable(GL_TEXTURE_2D);
+    }
   }
   gl.Finish();
 

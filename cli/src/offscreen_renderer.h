@@ -18,6 +18,10 @@ struct RenderItem {
   const NodeMesh* mesh = nullptr;  // positions in model units; must outlive the call
   glm::vec3 tint{1.0f};            // linear RGB 0..1, mixed with the surface colour
   float tint_share = 0.5f;         // of the tint in the mix: 0 draws the mesh's own colours
+  // When set and the mesh has UVs: drawn with this image on its UVs (v up: v = 0 is the image's
+  // bottom row), on a white surface instead of the vertex colours, still tinted by tint_share and
+  // lit. Must outlive the call.
+  const Image* texture = nullptr;
 };
 
 struct RenderView {
