@@ -492,7 +492,8 @@ TEST_F(BakeTest, CornerUvsBakeIntoTheSameTreeAsWedges) {
 
 // The image a PLY's TextureFile comment names (next to it) is copied into TREE/texture/ and
 // named by the manifest. A missing image, a name reaching outside the PLY's directory and an
-// input without UVs give a tree without a texture and say why.
+// input without UVs give a tree without a texture and say why; of several images the first is
+// copied, with a warning.
 TEST_F(BakeTest, TheTextureThePlyNamesIsCopiedIntoTheTree) {
   auto mesh = read_ply(small_ply());
   ASSERT_TRUE(mesh.ok()) << mesh.status().message();
@@ -512,6 +513,21 @@ TEST_F(BakeTest, TheTextureThePlyNamesIsCopiedIntoTheTree) {
   EXPECT_EQ(copied.texture_warning, "");
   EXPECT_EQ(written_manifest(path("copied"), copied).texture, "texture/rock tex.png");
   EXPECT_EQ(read_bytes(path("copied/texture/rock tex.png")), image);
+
+  // several textures (MeshLab's texnumber atlases): the first, and a warning that the others are not
+  {
+    std::string bytes = read_bytes(path("in/rock.ply"));
+    const std::string first = "comment TextureFile rock tex.png\n";
+    bytes.insert(bytes.find(first) + first.size(), "comment TextureFile rock 2.png\n");
+    test::write_bytes(path("in/atlas.ply"), bytes);
+    BakeOptions o = options("atlas");
+    o.input = path("in/atlas.ply");
+    auto r = bake(o);
+    ASSERT_TRUE(r.ok()) << r.status().message();
+    EXPECT_EQ(r->texture_warning, "its header names 2 textures (TextureFile comments); a tree carries one, the first "
+                                  "('rock tex.png'): faces whose UVs index another show it instead");
+    EXPECT_EQ(read_bytes(path("atlas/texture/rock tex.png")), image);
+  }
 
   const std::pair<std::string, std::string> refused[] = {
       {"missing.png", "its TextureFile comment names 'missing.png', but '" + path("in/missing.png").string() +

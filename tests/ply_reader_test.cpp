@@ -287,22 +287,22 @@ TEST(PlyReader, CornerUvsComeWithTheirTrianglesAndReadPlyMakesWedges) {
   // one vertex per (vertex, u, v) in first use order: vertex 2 twice, once per side of the seam
   const PlyMesh mesh = read_ok(path);
   EXPECT_TRUE(mesh.info.corner_uvs);
-  EXPECT_EQ(mesh.info.texture_file, "stone.png");
+  EXPECT_EQ(mesh.info.texture_files, std::vector<std::string>{"stone.png"});
   EXPECT_EQ(mesh.info.layout, (VertexLayout{.uv = true}));
   EXPECT_EQ(mesh.triangles, (std::vector<std::uint32_t>{0, 1, 2, 0, 2, 3, 1, 4, 5}));
   EXPECT_EQ(mesh.vertices, (std::vector<float>{0, 0, 0, 0, 0, 1, 0, 0, 1, 0, 1, 1, 0, 1, 1, 0, 1, 0, 0, 1,
                                                2, 0, 0, 0.5f, 0, 1, 1, 0, 0.9f, 1}));
 }
 
-// The image a textured mesh's UVs index: the first "comment TextureFile <name>", the keyword in
-// any case, the name as written (spaces inside kept, around it dropped).
-TEST(PlyReader, InfoNamesTheTextureFileOfTheFirstTextureFileComment) {
+// The images a textured mesh's UVs index: every "comment TextureFile <name>", the keyword in any
+// case, the name as written (spaces inside kept, around it dropped), in order.
+TEST(PlyReader, InfoNamesTheTexturesOfTheTextureFileComments) {
   ScratchDir dir;
-  const std::pair<std::string, std::string> cases[] = {
-      {"comment TextureFile stone.png\n", "stone.png"},
-      {"comment   texturefile \t old stone.jpg  \ncomment TextureFile second.png\n", "old stone.jpg"},
-      {"comment TextureFiles x.png\ncomment a TextureFile y.png\ncomment TextureFile\n", ""},
-      {"", ""}};
+  const std::pair<std::string, std::vector<std::string>> cases[] = {
+      {"comment TextureFile stone.png\n", {"stone.png"}},
+      {"comment   texturefile \t old stone.jpg  \ncomment TextureFile second.png\n", {"old stone.jpg", "second.png"}},
+      {"comment TextureFiles x.png\ncomment a TextureFile y.png\ncomment TextureFile\n", {}},
+      {"", {}}};
   for (const auto& [comments, expected] : cases) {
     SCOPED_TRACE(comments);
     const auto path = dir.file("textured.ply");
@@ -310,7 +310,7 @@ TEST(PlyReader, InfoNamesTheTextureFileOfTheFirstTextureFileComment) {
                           "element vertex 0\nproperty float x\nproperty float y\nproperty float z\nend_header\n");
     auto reader = PlyReader::open(path);
     ASSERT_TRUE(reader.ok()) << reader.status().message();
-    EXPECT_EQ(reader.value()->info().texture_file, expected);
+    EXPECT_EQ(reader.value()->info().texture_files, expected);
   }
 }
 

@@ -684,7 +684,7 @@ Result<BakeReport> run_bake(const BakeOptions& given) {
   }
   const fs::path work_parent = options.work_dir.empty() ? parent : options.work_dir;
   std::uint64_t input_triangles = kUnknownTriangles;
-  std::string texture_name;  // the input's TextureFile comment (PlyInfo::texture_file)
+  std::vector<std::string> texture_names;  // the input's TextureFile comments (PlyInfo::texture_files)
   if (!fs::is_directory(work_parent, ec))
     return io_error("work directory '" + work_parent.string() + "' does not exist or is not a directory");
   {
@@ -696,7 +696,7 @@ Result<BakeReport> run_bake(const BakeOptions& given) {
     auto reader = PlyReader::open(options.input, header_only);
     if (!reader.ok()) return reader.status();
     const PlyInfo& info = reader.value()->info();
-    texture_name = info.texture_file;
+    texture_names = info.texture_files;
     // every face gives at least one triangle; a tree without any is refused by every reader of
     // trees, and would replace a good tree in the output directory
     if (info.face_count == 0)
@@ -769,7 +769,7 @@ Result<BakeReport> run_bake(const BakeOptions& given) {
     auto header = manifest_header(options, threads, soup.value(), octree.value());
     if (!header.ok()) return header.status();
     Manifest& manifest = header.value();
-    auto texture = copy_tree_texture(options.input, texture_name, manifest.layout.uv, staging->path());
+    auto texture = copy_tree_texture(options.input, texture_names, manifest.layout.uv, staging->path());
     if (!texture.ok()) return texture.status();
     manifest.texture = texture->file;
     report.texture_warning = texture->warning;

@@ -6,10 +6,11 @@ namespace octolod::bake {
 
 namespace fs = std::filesystem;
 
-Result<TreeTexture> copy_tree_texture(const fs::path& ply, const std::string& name, bool has_uv,
-                                      const fs::path& tree) {
+namespace {
+
+// The copy of `name` (the first TextureFile) and why it was not made.
+Result<TreeTexture> copy_first(const fs::path& ply, const std::string& name, bool has_uv, const fs::path& tree) {
   TreeTexture texture;
-  if (name.empty()) return texture;
   const std::string named = "its TextureFile comment names '" + name + "'";
   if (!has_uv) {
     texture.warning = named + ", but it has no texture coordinates: no texture in the tree";
@@ -35,6 +36,20 @@ Result<TreeTexture> copy_tree_texture(const fs::path& ply, const std::string& na
     return io_error("cannot copy the texture '" + source.string() + "' into '" + directory.string() +
                     "': " + ec.message());
   texture.file = "texture/" + relative.filename().string();
+  return texture;
+}
+
+}  // namespace
+
+Result<TreeTexture> copy_tree_texture(const fs::path& ply, const std::vector<std::string>& names, bool has_uv,
+                                      const fs::path& tree) {
+  if (names.empty()) return TreeTexture{};
+  Result<TreeTexture> texture = copy_first(ply, names.front(), has_uv, tree);
+  if (!texture.ok() || names.size() == 1) return texture;
+  const std::string several = "its header names " + std::to_string(names.size()) +
+                              " textures (TextureFile comments); a tree carries one, the first ('" + names.front() +
+                              "'): faces whose UVs index another show it instead";
+  texture->warning = texture->warning.empty() ? several : several + "; and " + texture->warning;
   return texture;
 }
 

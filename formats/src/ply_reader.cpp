@@ -195,9 +195,10 @@ Status check_counts(const ply::Header& header, const Plan& plan, std::uint64_t f
   return {};
 }
 
-// The name in the first "comment TextureFile <name>" of `comments` (keyword in any case), or "".
-std::string texture_file(const std::vector<std::string>& comments) {
+// The names in the "comment TextureFile <name>" lines of `comments` (keyword in any case).
+std::vector<std::string> texture_files(const std::vector<std::string>& comments) {
   constexpr std::string_view kKeyword = "texturefile";
+  std::vector<std::string> names;
   for (const std::string& comment : comments) {
     const std::size_t start = comment.find_first_not_of(" \t");
     if (start == std::string::npos || comment.size() - start <= kKeyword.size()) continue;
@@ -209,15 +210,15 @@ std::string texture_file(const std::vector<std::string>& comments) {
     if (name.front() != ' ' && name.front() != '\t') continue;
     const std::size_t first = name.find_first_not_of(" \t");
     const std::size_t last = name.find_last_not_of(" \t\r");
-    if (first != std::string_view::npos) return std::string(name.substr(first, last - first + 1));
+    if (first != std::string_view::npos) names.emplace_back(name.substr(first, last - first + 1));
   }
-  return {};
+  return names;
 }
 
 Result<Plan> build_plan(const ply::Header& header, const ply::FileBuffer& in) {
   const std::string& path = in.path();
   Plan plan;
-  plan.info.texture_file = texture_file(header.comments);
+  plan.info.texture_files = texture_files(header.comments);
   plan.info.path = path;
   plan.info.format = header.format;
   plan.info.header_bytes = header.bytes;

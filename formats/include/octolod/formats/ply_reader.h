@@ -69,10 +69,11 @@ struct PlyInfo {
   // The faces carry texture coordinates per corner (texcoord): layout.uv is set, but the vertex
   // batches' uv slots are not the texture coordinates, PlyBatch::corner_uvs are.
   bool corner_uvs = false;
-  // The image the texture coordinates index, as the header's first "comment TextureFile <name>"
-  // names it (MeshLab's and photogrammetry tools' convention; the keyword in any case), usually
-  // relative to the PLY's directory; empty when the header names none.
-  std::string texture_file;
+  // The images the texture coordinates index, as the header's "comment TextureFile <name>" lines
+  // name them (MeshLab's and photogrammetry tools' convention; the keyword in any case), in
+  // order, usually relative to the PLY's directory; empty when the header names none. Several
+  // go with a face property (texnumber) saying which image a face's UVs index.
+  std::vector<std::string> texture_files;
   // Subtracted from every position before it is rounded to float (PlyReadOptions): the decoded
   // positions are relative to it. Zeros unless an origin applies; with recentre_double_positions
   // it is known once the first vertex batch has been returned.
