@@ -307,6 +307,7 @@ TEST_F(BakeTest, LeafAtMaxDepthOverTheBudgetsCapIsStreamedIntoTheSameTree) {
   o.memory_budget_bytes = 64 << 20;
   auto earlier = bake(o);
   ASSERT_TRUE(earlier.ok()) << earlier.status().message();
+  EXPECT_EQ(earlier->streamed_leaves, 0u);
   const std::map<std::string, std::string> before = tree_files(path("out"));
   const Manifest earlier_manifest = written_manifest(path("out"), earlier.value());
   const NodeInfo* largest = nullptr;
@@ -329,6 +330,9 @@ TEST_F(BakeTest, LeafAtMaxDepthOverTheBudgetsCapIsStreamedIntoTheSameTree) {
     auto streamed = bake(o);
     ASSERT_TRUE(streamed.ok()) << streamed.status().message();
     EXPECT_EQ(streamed->octree_in_memory, in_memory);
+    EXPECT_EQ(streamed->streamed_leaves, 1u);
+    EXPECT_EQ(streamed->largest_streamed_leaf_triangles, largest->source_triangles);
+    EXPECT_EQ(streamed->header.stats.at("lod_streamed_leaves"), 1.0);
     const Manifest m = written_manifest(o.output, streamed.value());
     ASSERT_EQ(m.nodes.size(), earlier_manifest.nodes.size());
     std::size_t changed = 0;
@@ -975,11 +979,20 @@ TEST_F(BakeTest, CliExitCodesForWriteFailureBadInputAndUnwritableOutput) {
 // The 60K rock in one root leaf, far over the cap of --memory 24M (the bake's 16 MiB after the
 // program's share): built streaming (exit 0), a root whose LOD 1 fits the in-memory cap, no
 // temporary file left.
+// Where stderr_to_file sends a spawned CLI's stderr.
+std::string stderr_path;
+void stderr_to_file() {
+  const int fd = ::open(stderr_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  ::dup2(fd, STDERR_FILENO);
+}
+
+// ... and says so: the leaf's steep LOD step and what avoids it.
 TEST_F(BakeTest, CliBakesALeafAtMaxDepthOverTheCapStreaming) {
   ASSERT_NE(cli_path(), nullptr);
   std::vector<std::string> args = bake_args(small_ply(), path("out"), work());
   args.insert(args.end(), {"--max-depth", "0"});
-  const int status = wait_status(spawn_cli(args));
+  stderr_path = path("stderr.txt").string();
+  const int status = wait_status(spawn_cli(args, stderr_to_file));
   ASSERT_TRUE(WIFEXITED(status));
   EXPECT_EQ(WEXITSTATUS(status), 0);
   auto m = read_manifest(path("out") / "manifest.json");
@@ -987,8 +1000,15 @@ TEST_F(BakeTest, CliBakesALeafAtMaxDepthOverTheCapStreaming) {
   ASSERT_EQ(m->nodes.size(), 1u);
   EXPECT_EQ(m->nodes[0].lods[0].triangles, m->input_triangles);
   ASSERT_GE(m->nodes[0].lods.size(), 2u);
-  EXPECT_LE(m->nodes[0].lods[1].triangles,
-            max_depth_leaf_triangles((std::uint64_t{24} << 20) - kCliProgramBytes, m->layout, 500));
+  const std::uint64_t cap = max_depth_leaf_triangles((std::uint64_t{24} << 20) - kCliProgramBytes, m->layout, 500);
+  EXPECT_LE(m->nodes[0].lods[1].triangles, cap);
+  EXPECT_NE(read_bytes(path("stderr.txt"))
+                .find("1 leaf at --max-depth 0 held more triangles than --memory lets a leaf simplify in memory (the "
+                      "largest " + std::to_string(m->input_triangles) + "): built streaming, with a LOD 1 of at most " +
+                      std::to_string(cap) + " triangles"),
+            std::string::npos)
+      << read_bytes(path("stderr.txt"));
+  fs::remove(path("stderr.txt"));
   expect_no_temp_files();
 }
 

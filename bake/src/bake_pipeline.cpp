@@ -785,6 +785,12 @@ Result<BakeReport> run_bake(const BakeOptions& given) {
     manifest.stats["lod_rereads"] = static_cast<double>(octree->lod_stats.reread_lods);
     manifest.stats["lod_kept_bytes_peak"] = static_cast<double>(octree->lod_stats.peak_kept_bytes);
     manifest.stats["lod_streamed_internal_nodes"] = static_cast<double>(octree->lod_stats.streamed_internal_nodes);
+    manifest.stats["lod_streamed_leaves"] = static_cast<double>(octree->lod_stats.streamed_leaves);
+    report.streamed_leaves = octree->lod_stats.streamed_leaves;
+    report.largest_streamed_leaf_triangles = octree->lod_stats.largest_streamed_leaf;
+    if (report.streamed_leaves > 0)
+      report.streamed_lod1_triangles =
+          max_depth_leaf_triangles(options.memory_budget_bytes, manifest.layout, options.max_tris);
     report.soup_in_core = soup->in_core;
     report.input_trailing_bytes = soup->input_trailing_bytes;
     report.octree_in_memory = soup->mesh_consumed;

@@ -162,6 +162,10 @@ class LodTreeBuilder::Impl {
     s.shape.triangles = task.weight;
     ++stats_.leaves;
     stats_.depth = std::max(stats_.depth, s.shape.depth);
+    if (!streamed.empty()) {
+      ++stats_.streamed_leaves;
+      stats_.largest_streamed_leaf = std::max(stats_.largest_streamed_leaf, task.weight);
+    }
     task.work = streamed.empty() ? leaf_work_bytes(records.size()) : kRunsAlone;  // a streamed leaf runs alone
     queued_bytes_ += records.size();
     task.records = std::move(records);

@@ -173,6 +173,10 @@ struct LodTreeStats {
   // internal nodes built streaming because their children's LODs were too large to merge in
   // memory (lod_tree.cpp, run_streamed_internal)
   std::uint64_t streamed_internal_nodes = 0;
+  // leaves at max_depth too large for memory, built streaming (add_streamed_leaf), and the
+  // triangles of the largest
+  std::uint64_t streamed_leaves = 0;
+  std::uint64_t largest_streamed_leaf = 0;
 };
 
 class LodTreeBuilder {

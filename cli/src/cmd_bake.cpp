@@ -125,6 +125,13 @@ int run_bake(const BakeArgs& args, const CommandContext& context) {
   if (const std::optional<std::string> warning = float_precision_warning(r.header.bounds))
     warn(args.input + ": " + *warning);
   if (!r.texture_warning.empty()) warn(args.input + ": " + r.texture_warning);
+  if (r.streamed_leaves > 0)
+    warn(args.input + ": " + std::to_string(r.streamed_leaves) + (r.streamed_leaves == 1 ? " leaf" : " leaves") +
+         " at --max-depth " + std::to_string(r.header.parameters.max_depth) +
+         " held more triangles than --memory lets a leaf simplify in memory (the largest " +
+         std::to_string(r.largest_streamed_leaf_triangles) + "): built streaming, with a LOD 1 of at most " +
+         std::to_string(r.streamed_lod1_triangles) +
+         " triangles, a steep step down from LOD 0 for a runtime; a larger --max-depth splits them");
   if (context.json) {
     print_json(report_json(r, args.output));
     return 0;

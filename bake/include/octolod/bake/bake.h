@@ -179,6 +179,12 @@ struct BakeReport {
   // (Manifest::texture stays empty): no UVs, a path outside the input's directory, no such file.
   // Empty when it was copied or none was named.
   std::string texture_warning;
+  // Leaves at max_depth that held more triangles than the budget lets a leaf simplify in memory,
+  // built streaming: their LOD 1 has at most streamed_lod1_triangles (set when there are any), a
+  // steep step down from their LOD 0 for a runtime. A larger max_depth splits such leaves.
+  std::uint64_t streamed_leaves = 0;
+  std::uint64_t largest_streamed_leaf_triangles = 0;
+  std::uint64_t streamed_lod1_triangles = 0;
 };
 
 // Bakes options.input into options.output (see the top of this file). Errors: usage for bad
