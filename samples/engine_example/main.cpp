@@ -109,6 +109,10 @@ int main(int argc, char** argv) {
   octolod::runtime::StreamingTree& tree = *opened.value();
   std::printf("%s: %zu nodes, %llu triangles baked\n", argv[1], tree.manifest().nodes.size(),
               static_cast<unsigned long long>(tree.manifest().input_triangles));
+  // The material's image, if the input was a textured mesh: load it as the engine loads images
+  // (its v runs up from the image's bottom row).
+  if (!tree.manifest().texture.empty())
+    std::printf("texture: %s/%s\n", argv[1], tree.manifest().texture.c_str());
 
   GpuMeshCache gpu;
   const auto frame_time = std::chrono::microseconds(16667);
