@@ -147,7 +147,7 @@ DrawArrays expand(const NodeMesh& mesh, glm::vec3 tint, float tint_share, bool t
 
 // The textures of one render, each image uploaded once: its rows bottom first, since OpenGL's
 // t = 0 is the first row it is given and a mesh's v = 0 is the image's bottom row. Modulated by the
-// lit surface colour, repeating, linearly filtered. The textures go with the context.
+// lit surface colour, repeating, mipmapped. The textures go with the context.
 class TextureUploads {
  public:
   explicit TextureUploads(const OsMesa& gl) : gl_(gl) {}
@@ -157,7 +157,9 @@ class TextureUploads {
     if (added) {
       gl_.GenTextures(1, &it->second);
       gl_.BindTexture(GL_TEXTURE_2D, it->second);
-      gl_.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+      // mipmaps built by the GL (1.4's GENERATE_MIPMAP): a far view of a large texture does not alias
+      gl_.TexParameteri(GL_TEXTURE_2D, GL_GENERATE_MIPMAP, GL_TRUE);
+      gl_.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR_MIPMAP_LINEAR);
       gl_.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
       gl_.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_REPEAT);
       gl_.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_REPEAT);
