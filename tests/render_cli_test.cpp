@@ -247,17 +247,21 @@ TEST_F(RenderCli, BakedRockIsDrawnAndEveryDrawnTriangleIsCounted) {
 // texture is a usage error, with no picture.
 TEST_F(RenderCli, TextureFlagDrawsTheTreesTextureInsteadOfTheTints) {
   const auto dir = scratch_dir("texture");
+  // sample --texture writes rock.png next to rock.ply and names it in the header
   const std::string ply = (dir / "rock.ply").string();
-  ASSERT_EQ(octolod("sample --shape rock --triangles 20000 -o " + ply, dir).exit_code, 0);
-  std::ifstream in(ply, std::ios::binary);
-  std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  bytes.insert(bytes.find('\n', bytes.find("format")) + 1, "comment TextureFile halves.png\n");
-  std::ofstream(dir / "textured.ply", std::ios::binary) << bytes;
+  const CliRun sampled = octolod("--json sample --shape rock --triangles 20000 --texture -o " + ply, dir);
+  ASSERT_EQ(sampled.exit_code, 0);
+  EXPECT_EQ(sampled.json.at("texture"), (dir / "rock.png").string());
+  ASSERT_EQ(read_png(dir / "rock.png").width, 1024);
+  EXPECT_EQ(octolod("sample --shape rock --triangles 20000 --attributes normal --texture -o " +
+                        (dir / "bare.ply").string(), dir).exit_code, 1);
+  EXPECT_FALSE(std::filesystem::exists(dir / "bare.ply"));
+  // ... replaced here by one whose hues the test knows
   Image halves(60, 32, 0x0000ff);
   for (int y = 0; y < 32; ++y)
     for (int x = 0; x < 10; ++x) halves.set(x, y, 0xff0000);
-  ASSERT_TRUE(write_png(dir / "halves.png", halves).ok());
-  ASSERT_EQ(octolod("bake " + (dir / "textured.ply").string() + " -o " + (dir / "rock").string(), dir).exit_code, 0);
+  ASSERT_TRUE(write_png(dir / "rock.png", halves).ok());
+  ASSERT_EQ(octolod("bake " + ply + " -o " + (dir / "rock").string(), dir).exit_code, 0);
 
   const auto png = dir / "textured.png";
   const CliRun run =
@@ -277,6 +281,7 @@ TEST_F(RenderCli, TextureFlagDrawsTheTreesTextureInsteadOfTheTints) {
   EXPECT_GT(blue, 1000);
   EXPECT_LT(unlike_the_texture, lit / 100);
 
+  std::filesystem::remove(dir / "rock.png");  // the bake warns and the tree has no texture
   ASSERT_EQ(octolod("bake " + ply + " -o " + (dir / "plain").string(), dir).exit_code, 0);
   const auto refused = dir / "refused.png";
   EXPECT_EQ(octolod("render " + (dir / "plain").string() + " --texture -o " + refused.string(), dir).exit_code, 1);

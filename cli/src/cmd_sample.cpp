@@ -14,9 +14,33 @@
 #include "octolod/bake/temp_dir.h"
 #include "octolod/formats/output_file.h"
 #include "octolod/samplegen/sample_generator.h"
+#include "image.h"
 #include "progress.h"
 
 namespace octolod::cli {
+namespace {
+
+// The sample's texture: six hue bands along u (red, yellow, green, cyan, blue, magenta), a
+// checker of 16 x 8 cells dimming every other one, so that a render shows where the UVs run and
+// where they are cut (the rock's u = 0 / 1 seam, the city's tiles).
+Image sample_texture() {
+  constexpr int kWidth = 1024, kHeight = 512;
+  constexpr std::uint32_t kBands[6] = {0xe04040, 0xe0c030, 0x40c050, 0x30b0d0, 0x4060e0, 0xc040c0};
+  Image image(kWidth, kHeight, 0);
+  for (int y = 0; y < kHeight; ++y)
+    for (int x = 0; x < kWidth; ++x) {
+      const std::uint32_t band = kBands[x * 6 / kWidth];
+      const bool dim = ((x * 16 / kWidth) + (y * 8 / kHeight)) % 2 == 1;
+      const auto channel = [&](int shift) {
+        const std::uint32_t c = (band >> shift) & 0xFFu;
+        return (dim ? c * 5 / 8 : c) << shift;
+      };
+      image.set(x, y, channel(16) | channel(8) | channel(0));
+    }
+  return image;
+}
+
+}  // namespace
 
 int run_sample(const SampleArgs& args, const CommandContext& context) {
   using namespace octolod::samplegen;
@@ -37,6 +61,12 @@ int run_sample(const SampleArgs& args, const CommandContext& context) {
   }
   Result<SampleCounts> counts = sample_counts(spec);
   if (!counts.ok()) return report(counts.status());
+  std::filesystem::path texture;  // next to the output: OUT.png
+  if (args.texture) {
+    if (!spec.layout.uv) return report(usage_error("--texture: the sample has no uv to index it (--attributes)"));
+    texture = std::filesystem::path(args.output).replace_extension(".png");
+    spec.texture_file = texture.filename().string();
+  }
 
   // Written inside a temporary directory next to the output, then renamed into place: SIGINT or
   // SIGTERM removes it (and a later run one left by a killed process), so a large sample
@@ -57,6 +87,13 @@ int run_sample(const SampleArgs& args, const CommandContext& context) {
       SampleStreamOptions{.threads = std::max(1u, std::thread::hardware_concurrency())});
   if (bake::cleanup_signal_received()) bake::await_signal_cleanup();
   if (!written.ok()) return report(written);
+  if (!texture.empty()) {
+    const std::filesystem::path staged_texture = staging->path() / texture.filename();
+    if (const Status image = write_png(staged_texture, sample_texture()); !image.ok()) return report(image);
+    std::error_code moved;
+    std::filesystem::rename(staged_texture, std::filesystem::absolute(texture), moved);
+    if (moved) return report(io_error(texture.string() + ": cannot write: " + moved.message()));
+  }
   std::error_code renamed;
   std::filesystem::rename(staged, output, renamed);
   if (renamed) return report(io_error(args.output + ": cannot write: " + renamed.message()));
@@ -73,6 +110,7 @@ int run_sample(const SampleArgs& args, const CommandContext& context) {
                 {"vertices", counts->vertices},
                 {"triangles", counts->triangles},
                 {"attributes", spec.layout.describe()},
+                {"texture", texture.string()},
                 {"bytes", bytes},
                 {"seconds", seconds}});
   } else {

@@ -321,6 +321,9 @@ void add_sample_command(CLI::App& app, CommandContext& context) {
       ->delimiter(',')
       ->expected(3);
   command->add_flag("--ascii", args->ascii, "Write ascii PLY (default: binary little-endian)");
+  command->add_flag("--texture", args->texture,
+                    "Also write a texture for the UVs next to the PLY (OUT.png: hue bands along u, a checker), named "
+                    "in its header as textured scans name theirs (comment TextureFile)");
   command->add_option("-o,--output", args->output, "Output .ply file")->required();
   command->callback([args, &context] { context.exit_code = run_sample(*args, context); });
 }

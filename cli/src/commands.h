@@ -96,6 +96,7 @@ struct SampleArgs {
   std::uint64_t seed = 1;
   std::vector<double> offset;  // empty or x, y, z
   bool ascii = false;
+  bool texture = false;  // also write a procedural texture next to the PLY, named in its header
   std::string output;
 };
 

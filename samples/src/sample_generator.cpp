@@ -253,7 +253,9 @@ Status write_sample_ply(const SampleSpec& spec, const std::filesystem::path& pat
     std::snprintf(text, sizeof text, " --offset %.17g,%.17g,%.17g", spec.offset[0], spec.offset[1], spec.offset[2]);
     command += text;
   }
+  if (!spec.texture_file.empty()) command += " --texture";
   options.comments.push_back(std::move(command));
+  if (!spec.texture_file.empty()) options.comments.push_back("TextureFile " + spec.texture_file);
   Result<std::unique_ptr<PlyWriter>> writer =
       PlyWriter::create(path, options, counts.vertices, counts.triangles);
   if (!writer.ok()) return writer.status();

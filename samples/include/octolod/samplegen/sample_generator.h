@@ -71,6 +71,9 @@ struct SampleSpec {
   // double: the same model placed far from the origin, as geo-referenced data is (the stream's
   // positions stay as generated).
   std::array<double, 3> offset{0.0, 0.0, 0.0};
+  // When not empty, write_sample_ply names this image in a "comment TextureFile" line (the
+  // texture its UVs index, relative to the PLY; `octolod sample --texture` writes one).
+  std::string texture_file;
 };
 
 inline constexpr std::uint64_t kMinTriangles = 16;
