@@ -15,9 +15,9 @@
 #include <limits>
 #include <optional>
 #include <span>
-#include <unordered_map>
 #include <string>
 #include <string_view>
+#include <unordered_map>
 #include <utility>
 #include <vector>
 
