@@ -569,10 +569,7 @@ class StreamReader final : public PlyReader {
           const std::uint64_t where = source_.position();
           std::int64_t length = 0;
           OCTOLOD_RETURN_IF_ERROR(source_.read_integer(p.property.count_type, length));
-          if (length < 3 || static_cast<std::uint64_t>(length) > kMaxPolygonVertices)
-            return error_at(where, "face " + std::to_string(index_) + " has " +
-                                       std::to_string(length) + " vertices (a polygon needs 3 to " +
-                                       std::to_string(kMaxPolygonVertices) + ")");
+          OCTOLOD_RETURN_IF_ERROR(check_polygon_length(where, length));
           face_.in_list = true;
           face_.length = static_cast<std::uint32_t>(length);
           face_.done = 0;
@@ -647,10 +644,7 @@ class StreamReader final : public PlyReader {
       std::int64_t length = 0;
       OCTOLOD_RETURN_IF_ERROR(source_.read_integer(p.property.count_type, length));
       if (p.is_index_list) {
-        if (length < 3 || static_cast<std::uint64_t>(length) > kMaxPolygonVertices)
-          return error_at(where, "face " + std::to_string(index_) + " has " + std::to_string(length) +
-                                     " vertices (a polygon needs 3 to " +
-                                     std::to_string(kMaxPolygonVertices) + ")");
+        OCTOLOD_RETURN_IF_ERROR(check_polygon_length(where, length));
         for (std::int64_t i = 0; i < length; ++i) {
           const std::uint64_t at = source_.position();
           std::int64_t index = 0;
@@ -683,6 +677,14 @@ class StreamReader final : public PlyReader {
                                      std::to_string(polygon_uvs_.size()) + " texture coordinates for " +
                                      std::to_string(polygon_.size()) +
                                      " vertices (texcoord holds u and v for every corner)");
+    return {};
+  }
+
+  // A face's index list length, read at `where`: a polygon.
+  Status check_polygon_length(std::uint64_t where, std::int64_t length) const {
+    if (length < 3 || static_cast<std::uint64_t>(length) > kMaxPolygonVertices)
+      return error_at(where, "face " + std::to_string(index_) + " has " + std::to_string(length) +
+                                 " vertices (a polygon needs 3 to " + std::to_string(kMaxPolygonVertices) + ")");
     return {};
   }
 
