@@ -5,12 +5,11 @@
 
 #include <cstddef>
 #include <cstdint>
-#include <initializer_list>
 #include <memory>
 #include <string>
 #include <vector>
 
-#include "octolod/formats/input_file.h"
+#include "octolod/formats/gltf.h"
 
 namespace octolod::cli {
 namespace {
@@ -61,22 +60,13 @@ Result<Image> decode_jpeg(const std::filesystem::path& path, const std::vector<s
   return image;
 }
 
-bool starts_with(const std::vector<std::byte>& bytes, std::initializer_list<unsigned char> magic) {
-  if (bytes.size() < magic.size()) return false;
-  std::size_t i = 0;
-  for (unsigned char m : magic)
-    if (std::to_integer<unsigned char>(bytes[i++]) != m) return false;
-  return true;
-}
-
 }  // namespace
 
 Result<Image> read_texture_image(const std::filesystem::path& path) {
-  Result<std::vector<std::byte>> bytes = read_input_file(path, "the texture");
-  if (!bytes.ok()) return bytes.status();
-  if (starts_with(bytes.value(), {0x89, 'P', 'N', 'G'})) return decode_png(path, bytes.value());
-  if (starts_with(bytes.value(), {0xFF, 0xD8, 0xFF})) return decode_jpeg(path, bytes.value());
-  return unsupported_error(path.string() + ": not a PNG or JPEG image");
+  // the images glTF embeds are the ones render draws: read and told apart by the same code
+  Result<GltfTexture> image = read_gltf_texture(path);
+  if (!image.ok()) return image.status();
+  return image->mime_type == "image/png" ? decode_png(path, image->bytes) : decode_jpeg(path, image->bytes);
 }
 
 }  // namespace octolod::cli

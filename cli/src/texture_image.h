@@ -13,10 +13,10 @@ namespace octolod::cli {
 // samples no larger texture.
 inline constexpr int kMaxTextureSide = 8192;
 
-// Decodes the PNG or JPEG at `path` (told apart by their first bytes) into RGBA, the image's top
-// row first. Errors name the file: io when it cannot be read, unsupported for another image type
-// or one over kMaxTextureSide on a side (known from its header, before the pixels are
-// allocated), bad_input for an image the decoder refuses.
+// Decodes the PNG or JPEG at `path` (read and told apart by read_gltf_texture: the images an
+// export embeds) into RGBA, the image's top row first. Errors name the file: io when it cannot be
+// read, unsupported for another image type or one over kMaxTextureSide on a side (known from its
+// header, before the pixels are allocated), bad_input for an image the decoder refuses.
 Result<Image> read_texture_image(const std::filesystem::path& path);
 
 }  // namespace octolod::cli
