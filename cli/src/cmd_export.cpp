@@ -42,7 +42,7 @@ int run_export(const ExportArgs& args, const CommandContext& context) {
   options.translation = manifest.origin;
   // the tree's texture as the meshes' material: a tree whose image glTF cannot embed (not PNG
   // or JPEG) or that lost it still exports, untextured, with a warning
-  if (!manifest.texture.empty() && manifest.layout.uv) {
+  if (manifest.has_texture()) {
     Result<GltfTexture> texture = read_gltf_texture(root / manifest.texture);
     if (texture.ok())
       options.texture = std::move(texture).value();

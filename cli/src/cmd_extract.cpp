@@ -34,7 +34,7 @@ int run_extract(const ExtractArgs& args, const CommandContext& context) {
   if (!mesh.ok()) return report(mesh.status());
   // the tree's texture named relative to the cut, so that a viewer finds it
   std::string texture;
-  if (!manifest.texture.empty() && manifest.layout.uv) {
+  if (manifest.has_texture()) {
     const std::filesystem::path output_dir = std::filesystem::absolute(args.output).lexically_normal().parent_path();
     texture = std::filesystem::absolute(root / manifest.texture).lexically_normal().lexically_relative(output_dir).generic_string();
   }

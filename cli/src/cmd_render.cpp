@@ -87,7 +87,7 @@ int run_render(const RenderArgs& args, const CommandContext& context) {
   std::optional<Image> texture;
   if (args.texture) {
     const Manifest& manifest = tree.manifest();
-    if (manifest.texture.empty() || !manifest.layout.uv)
+    if (!manifest.has_texture())
       return report(usage_error("--texture: " + args.tree + " has no texture (its input's PLY named none in a "
                                 "TextureFile comment, or it has no UVs)"));
     Result<Image> decoded = read_texture_image(std::filesystem::path(args.tree) / manifest.texture);

@@ -87,6 +87,9 @@ struct Manifest {
   std::map<std::string, double> stage_seconds;  // wall time per bake stage
   std::map<std::string, double> stats;          // other numbers (peak RSS bytes, ...)
   std::vector<NodeInfo> nodes;          // nodes[0] is the root; parents precede children
+
+  // A texture the meshes can show: one is named and the layout has UVs to index it.
+  bool has_texture() const { return !texture.empty() && layout.uv; }
 };
 
 std::string manifest_to_json(const Manifest& manifest);
