@@ -1,5 +1,5 @@
 // The input's texture in a baked tree (Manifest::texture): the image a PLY's TextureFile comment
-// names (PlyInfo::texture_file), copied into TREE/texture/ so that the tree, which a game or an
+// names (the first of PlyInfo::texture_files), copied into TREE/texture/ so that the tree, which a game or an
 // exporter reads without the input, is self-contained.
 #pragma once
 
