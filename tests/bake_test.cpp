@@ -459,39 +459,54 @@ TEST_F(BakeTest, TinyBudgetOutOfCoreGivesTheSameTreeAsALargeBudget) {
             manifest_to_json(without_run_details(ml)));
 }
 
-// A textured scan's PLY has its UVs per face corner (texcoord) and one vertex per position:
-// the same rock written that way (test::write_corner_uv_ply, its UV seams welded) bakes out of
-// core into the node files its vertex-per-wedge PLY gives in memory (the in-memory octree).
-TEST_F(BakeTest, CornerUvsBakeIntoTheSameTreeAsWedges) {
-  auto mesh = read_ply(small_ply());
-  ASSERT_TRUE(mesh.ok()) << mesh.status().message();
-  test::write_corner_uv_ply(path("corners.ply"), mesh->info.layout, mesh->vertices, mesh->triangles);
-  BakeOptions wedges = options("wedges");
-  wedges.memory_budget_bytes = 256 << 20;
-  wedges.max_tris = 60;
-  BakeOptions corners = options("corners");
-  corners.input = path("corners.ply");
-  corners.memory_budget_bytes = 2 << 20;
-  corners.force_out_of_core = true;
-  corners.max_tris = 60;
-  auto rw = bake(wedges);
-  ASSERT_TRUE(rw.ok()) << rw.status().message();
-  auto rc = bake(corners);
-  ASSERT_TRUE(rc.ok()) << rc.status().message();
-  EXPECT_TRUE(rw->octree_in_memory);
-  EXPECT_FALSE(rc->soup_in_core);
-  EXPECT_LT(rc->header.input_vertices, rw->header.input_vertices);  // the seams' copies welded
-  EXPECT_EQ(rc->header.layout, rw->header.layout);
-  auto a = tree_files(path("wedges"));
-  auto b = tree_files(path("corners"));
-  a.erase("manifest.json");
-  b.erase("manifest.json");
-  EXPECT_GT(a.size(), 20u);
-  EXPECT_TRUE(a == b);
-  Manifest mc = without_run_details(written_manifest(path("corners"), rc.value()));
-  mc.parameters.input = wedges.input.string();
-  mc.input_vertices = rw->header.input_vertices;
-  EXPECT_EQ(manifest_to_json(mc), manifest_to_json(without_run_details(written_manifest(path("wedges"), rw.value()))));
+// A textured scan's PLY has its UVs per face corner (texcoord) and one vertex per position; a
+// segmented scan or a CAD export has a colour per face. The same rock written that way
+// (test::write_face_attribute_ply, its seams welded) bakes out of core into the node files its
+// vertex-per-wedge PLY gives in memory (the in-memory octree): UVs per corner, and UVs per
+// corner with colours per face (every 97 triangles another colour, test::with_face_colours).
+TEST_F(BakeTest, CornerAttributesBakeIntoTheSameTreeAsWedges) {
+  auto rock = read_ply(small_ply());
+  ASSERT_TRUE(rock.ok()) << rock.status().message();
+  const test::TestMesh coloured = test::with_face_colours(rock->info.layout, rock->vertices, rock->triangles);
+  for (const CornerAttributes corners : {CornerAttributes{.uv = true}, CornerAttributes{.color = true, .uv = true}}) {
+    SCOPED_TRACE(corners.color ? "face colours and corner uvs" : "corner uvs");
+    const std::string name = corners.color ? "coloured" : "textured";
+    const std::vector<float>& vertices = corners.color ? coloured.vertices : rock->vertices;
+    const std::vector<std::uint32_t>& triangles = corners.color ? coloured.triangles : rock->triangles;
+    PlyWriteOptions write_options;
+    write_options.layout = rock->info.layout;
+    write_options.color_type = PlyColorType::float32;  // exact
+    ASSERT_TRUE(write_ply(path(name + "-wedges.ply"), write_options, vertices, triangles).ok());
+    test::write_face_attribute_ply(path(name + "-corners.ply"), rock->info.layout, vertices, triangles, corners);
+    BakeOptions wedges = options(name + "-wedges");
+    wedges.input = path(name + "-wedges.ply");
+    wedges.memory_budget_bytes = 256 << 20;
+    wedges.max_tris = 60;
+    BakeOptions on_corners = options(name + "-corners");
+    on_corners.input = path(name + "-corners.ply");
+    on_corners.memory_budget_bytes = 2 << 20;
+    on_corners.force_out_of_core = true;
+    on_corners.max_tris = 60;
+    auto rw = bake(wedges);
+    ASSERT_TRUE(rw.ok()) << rw.status().message();
+    auto rc = bake(on_corners);
+    ASSERT_TRUE(rc.ok()) << rc.status().message();
+    EXPECT_TRUE(rw->octree_in_memory);
+    EXPECT_FALSE(rc->soup_in_core);
+    EXPECT_LT(rc->header.input_vertices, rw->header.input_vertices);  // the seams' copies welded
+    EXPECT_EQ(rc->header.layout, rw->header.layout);
+    auto a = tree_files(path(name + "-wedges"));
+    auto b = tree_files(path(name + "-corners"));
+    a.erase("manifest.json");
+    b.erase("manifest.json");
+    EXPECT_GT(a.size(), 20u);
+    EXPECT_TRUE(a == b);
+    Manifest mc = without_run_details(written_manifest(path(name + "-corners"), rc.value()));
+    mc.parameters.input = wedges.input.string();
+    mc.input_vertices = rw->header.input_vertices;
+    EXPECT_EQ(manifest_to_json(mc),
+              manifest_to_json(without_run_details(written_manifest(path(name + "-wedges"), rw.value()))));
+  }
 }
 
 // The image a PLY's TextureFile comment names (next to it) is copied into TREE/texture/ and
@@ -506,7 +521,8 @@ TEST_F(BakeTest, TheTextureThePlyNamesIsCopiedIntoTheTree) {
   test::write_bytes(path("in/rock tex.png"), image);
   test::write_bytes(path("outside.png"), image);
   const auto bake_named = [&](const std::string& texture, const std::string& out) {
-    test::write_corner_uv_ply(path("in/rock.ply"), mesh->info.layout, mesh->vertices, mesh->triangles, texture);
+    test::write_face_attribute_ply(path("in/rock.ply"), mesh->info.layout, mesh->vertices, mesh->triangles,
+                                   CornerAttributes{.uv = true}, texture);
     BakeOptions o = options(out);
     o.input = path("in/rock.ply");
     auto r = bake(o);

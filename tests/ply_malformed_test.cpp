@@ -36,6 +36,13 @@ std::string ascii_uv_mesh(const std::string& faces, const std::string& texcoord_
          "property list uchar " + texcoord_type + " texcoord\nend_header\n" +
          "0.000 0.000 0.000\n1.000 0.000 0.000\n0.000 1.000 0.000\n" + faces;
 }
+// The same with a colour per face (`type` red, green, blue) after the indices: header lines
+// 1-12, the face's line is 16.
+std::string ascii_face_color_mesh(const std::string& faces, const std::string& type = "float") {
+  return std::string("ply\nformat ascii 1.0\nelement vertex 3\n") + kXyz + kFaces + "property " + type +
+         " red\nproperty " + type + " green\nproperty " + type + " blue\nend_header\n" +
+         "0.000 0.000 0.000\n1.000 0.000 0.000\n0.000 1.000 0.000\n" + faces;
+}
 constexpr std::size_t kOneMiB = std::size_t{1} << 20;
 const std::string kGoodVertices = "0.000 0.000 0.000\n1.000 0.000 0.000\n0.000 1.000 0.000\n";
 
@@ -160,6 +167,14 @@ std::vector<MalformedCase> malformed_cases() {
        "face property 'texcoord' is not a list of floats"},
       {"TexcoordIndexOutOfRange", ascii_uv_mesh("3 0 1 3 6 0 0 1 0 0 1\n"), ErrorCode::bad_input, "line 14",
        "face 0 has vertex index 3, out of range (the file has 3 vertices)"},
+      {"FaceColourNaN", ascii_face_color_mesh("3 0 1 2 0.5 nan 1\n"), ErrorCode::bad_input, "line 16",
+       "face 0 has a non-finite green (NaN)"},
+      {"FaceColourBeyond1e18", ascii_face_color_mesh("3 0 1 2 0.5 1 -2e19\n"), ErrorCode::bad_input,
+       "line 16", "face 0 has a blue of -2e+19, beyond ±1e18"},
+      {"FaceColourOverUchar", ascii_face_color_mesh("3 0 1 2 255 256 0\n", "uchar"), ErrorCode::bad_input,
+       "line 16", "bad uchar value '256'"},
+      {"FaceColourIndexOutOfRange", ascii_face_color_mesh("3 0 5 2 1 1 1\n"), ErrorCode::bad_input,
+       "line 16", "face 0 has vertex index 5, out of range (the file has 3 vertices)"},
       {"AsciiOverlongValue", ascii_mesh(std::string(2000, '1') + " 0 0\n" + kGoodVertices, ""),
        ErrorCode::bad_input, "line 10", "value longer than 1024 characters in vertex 0 of 3"},
   };
@@ -360,16 +375,17 @@ TEST(PlyMalformed, MissingFileIsAnIoError) {
 
 // A small mesh with quads (so the size check, which assumes triangles, lets many truncated
 // files through to the streaming decoder), read back after cutting it at every byte length.
-// Also with corner UVs (a texcoord list after each quad's indices), which are read whole per face.
+// Also with attributes per corner (a colour and a texcoord list after each quad's indices), which
+// are read whole per face.
 TEST(PlyTruncation, EveryLengthFailsCleanly) {
   ScratchDir dir;
   const VertexLayout layout{true, true, true};
   const test::TestMesh strip = test::strip_mesh(layout, true, 40);
   constexpr PlyFormat kFormats[] = {PlyFormat::binary_little_endian,
                                     PlyFormat::binary_big_endian, PlyFormat::ascii};
-  for (const bool corner_uvs : {false, true}) {
+  for (const bool corner_values : {false, true}) {
     for (PlyFormat format : kFormats) {
-      SCOPED_TRACE(std::string(to_string(format)) + (corner_uvs ? " corner uvs" : ""));
+      SCOPED_TRACE(std::string(to_string(format)) + (corner_values ? " face colours and corner uvs" : ""));
       const bool big = format == PlyFormat::binary_big_endian;
       // Write the vertices with PlyWriter, then replace the face element with 100 quads.
       const auto source = dir.file("source.ply");
@@ -377,22 +393,24 @@ TEST(PlyTruncation, EveryLengthFailsCleanly) {
       std::string bytes = test::read_bytes(source);
       const std::string old_faces = "element face 0\n";
       bytes.replace(bytes.find(old_faces), old_faces.size(), "element face 100\n");
-      if (corner_uvs) {
+      if (corner_values) {
         const std::string indices = "property list uchar int vertex_indices\n";
-        bytes.insert(bytes.find(indices) + indices.size(), "property list uchar float texcoord\n");
+        bytes.insert(bytes.find(indices) + indices.size(),
+                     "property uchar red\nproperty uchar green\nproperty uchar blue\n"
+                     "property list uchar float texcoord\n");
       }
       for (std::int32_t q = 0; q < 100; ++q) {
         const std::int32_t a = q % 37;
         if (format == PlyFormat::ascii) {
           bytes += "4 " + std::to_string(a) + " " + std::to_string(a + 1) + " " +
                    std::to_string(a + 2) + " " + std::to_string(a + 3);
-          if (corner_uvs) bytes += " 8 0.5 0.25 1 0.25 1 1 0.5 " + std::to_string(q);
+          if (corner_values) bytes += " 7 80 255 8 0.5 0.25 1 0.25 1 1 0.5 " + std::to_string(q);
           bytes += "\n";
         } else {
           bytes += '\x04';
           for (std::int32_t k = 0; k < 4; ++k) append_scalar(bytes, a + k, big);
-          if (corner_uvs) {
-            bytes += '\x08';
+          if (corner_values) {
+            bytes += "\x07\x50\xff\x08";
             for (std::int32_t k = 0; k < 8; ++k) append_scalar(bytes, static_cast<float>(q + k) * 0.125f, big);
           }
         }
@@ -402,6 +420,7 @@ TEST(PlyTruncation, EveryLengthFailsCleanly) {
       auto whole = read_ply(path);
       ASSERT_TRUE(whole.ok()) << whole.status().message();
       ASSERT_EQ(whole->triangles.size(), 600u);
+      ASSERT_EQ(whole->info.corners, (CornerAttributes{.color = corner_values, .uv = corner_values}));
 
       // An ascii file cut inside its last value (or its final newline) is still a valid file.
       const std::size_t last_value = bytes.find_last_of(' ') + 1;

@@ -151,11 +151,11 @@ TEST(PlyReader, StreamsInBatchesNoLargerThanTheBuffer) {
   }
 }
 
-// Every triangle batch (and its corner UVs, when the faces have them), read in the smallest
-// batches.
+// Every triangle batch (and its corner values, when the faces give their corners attributes),
+// read in the smallest batches.
 struct TriangleStream {
   std::vector<std::uint32_t> triangles;
-  std::vector<float> uvs;
+  std::vector<float> corner_values;
   int batches = 0;
 };
 TriangleStream stream_triangles(const std::filesystem::path& path) {
@@ -169,23 +169,25 @@ TriangleStream stream_triangles(const std::filesystem::path& path) {
     if (!batch.ok() || batch->kind == PlyBatch::Kind::end) break;
     if (batch->kind != PlyBatch::Kind::triangles) continue;
     EXPECT_EQ(batch->first, out.triangles.size() / 3);
-    EXPECT_EQ(batch->corner_uvs.size(), reader.value()->info().corner_uvs ? 2 * batch->triangles.size() : 0);
+    EXPECT_EQ(batch->corner_values.size(), reader.value()->info().corners.floats() * batch->triangles.size());
     out.triangles.insert(out.triangles.end(), batch->triangles.begin(), batch->triangles.end());
-    out.uvs.insert(out.uvs.end(), batch->corner_uvs.begin(), batch->corner_uvs.end());
+    out.corner_values.insert(out.corner_values.end(), batch->corner_values.begin(), batch->corner_values.end());
     ++out.batches;
   }
   return out;
 }
 
 // One polygon of `sides` vertices (vertex i at (i, i + 1, i + 2)), corner k on vertex 7k mod
-// sides, and with `corner_uvs` corner k's texture coordinates (k, -k / 2).
-std::string polygon_ply(PlyFormat format, std::uint32_t sides, bool corner_uvs) {
+// sides; with corners.uv corner k's texture coordinates (k, -k / 2), with corners.color the face's
+// colour (uchar 51, 102, 255: 0.2, 0.4, 1 as floats) after its indices.
+std::string polygon_ply(PlyFormat format, std::uint32_t sides, CornerAttributes corners) {
   const bool binary = format != PlyFormat::ascii;
   const bool big = format == PlyFormat::binary_big_endian;
   std::string text = "ply\nformat " + std::string(to_string(format)) + " 1.0\nelement vertex " +
                      std::to_string(sides) + "\nproperty float x\nproperty float y\nproperty float z\n"
                      "element face 1\nproperty list ushort uint vertex_indices\n" +
-                     (corner_uvs ? "property list ushort double texcoord\n" : "") + "end_header\n";
+                     (corners.color ? "property uchar red\nproperty uchar green\nproperty uchar blue\n" : "") +
+                     (corners.uv ? "property list ushort double texcoord\n" : "") + "end_header\n";
   for (std::uint32_t i = 0; i < sides; ++i) {
     if (binary) {
       for (std::uint32_t k = 0; k < 3; ++k) append_scalar(text, static_cast<float>(i + k), big);
@@ -196,7 +198,9 @@ std::string polygon_ply(PlyFormat format, std::uint32_t sides, bool corner_uvs) 
   if (binary) {
     append_scalar(text, static_cast<std::uint16_t>(sides), big);
     for (std::uint32_t i = 0; i < sides; ++i) append_scalar(text, (i * 7) % sides, big);
-    if (corner_uvs) {
+    if (corners.color)
+      for (int channel : {51, 102, 255}) append_scalar(text, static_cast<std::uint8_t>(channel), big);
+    if (corners.uv) {
       append_scalar(text, static_cast<std::uint16_t>(2 * sides), big);
       for (std::uint32_t i = 0; i < sides; ++i) {
         append_scalar(text, static_cast<double>(i), big);
@@ -206,7 +210,8 @@ std::string polygon_ply(PlyFormat format, std::uint32_t sides, bool corner_uvs) 
   } else {
     text += std::to_string(sides);
     for (std::uint32_t i = 0; i < sides; ++i) text += " " + std::to_string((i * 7) % sides);
-    if (corner_uvs) {
+    if (corners.color) text += " 51 102 255";
+    if (corners.uv) {
       text += " " + std::to_string(2 * sides);
       for (std::uint32_t i = 0; i < sides; ++i) text += " " + std::to_string(i) + " " + std::to_string(-0.5 * i);
     }
@@ -216,27 +221,38 @@ std::string polygon_ply(PlyFormat format, std::uint32_t sides, bool corner_uvs) 
 }
 
 // A 2000-gon fans into 1998 triangles, more than one 4 KiB batch holds (341): the fan must
-// continue across batches with the same centre, with its corners' UVs when the faces have them
-// (texcoord), in every format.
+// continue across batches with the same centre, with its corners' UVs and colour when the faces
+// have them (texcoord, red/green/blue), in every format.
 TEST(PlyReader, HugePolygonFanSpansBatches) {
   ScratchDir dir;
   constexpr std::uint32_t kSides = 2000;
-  for (const bool corner_uvs : {false, true}) {
+  for (const CornerAttributes corners : {CornerAttributes{}, CornerAttributes{.uv = true},
+                                         CornerAttributes{.color = true}, CornerAttributes{.color = true, .uv = true}}) {
     for (PlyFormat format : kFormats) {
-      SCOPED_TRACE(std::string(to_string(format)) + (corner_uvs ? " corner uvs" : ""));
+      SCOPED_TRACE(std::string(to_string(format)) + (corners.color ? " face colours" : "") +
+                   (corners.uv ? " corner uvs" : ""));
       const auto path = dir.file("polygon.ply");
-      write_bytes(path, polygon_ply(format, kSides, corner_uvs));
+      write_bytes(path, polygon_ply(format, kSides, corners));
       const TriangleStream stream = stream_triangles(path);
       EXPECT_EQ(stream.batches, (1998 + 340) / 341);
       ASSERT_EQ(stream.triangles.size(), 3u * 1998);
-      ASSERT_EQ(stream.uvs.size(), corner_uvs ? 6u * 1998 : 0u);
+      const std::size_t floats = corners.floats();
+      ASSERT_EQ(stream.corner_values.size(), 3u * floats * 1998);
       for (std::uint32_t t = 0; t < 1998; ++t) {
-        const std::uint32_t corners[3] = {0, t + 1, t + 2};
+        const std::uint32_t polygon_corners[3] = {0, t + 1, t + 2};
         for (std::uint32_t c = 0; c < 3; ++c) {
-          ASSERT_EQ(stream.triangles[3 * t + c], (corners[c] * 7) % kSides) << t;
-          if (!corner_uvs) continue;
-          ASSERT_EQ(stream.uvs[6 * t + 2 * c], static_cast<float>(corners[c])) << t;
-          ASSERT_EQ(stream.uvs[6 * t + 2 * c + 1], static_cast<float>(-0.5 * corners[c])) << t;
+          const std::uint32_t k = polygon_corners[c];
+          ASSERT_EQ(stream.triangles[3 * t + c], (k * 7) % kSides) << t;
+          const float* values = stream.corner_values.data() + (3 * t + c) * floats;
+          if (corners.color) {
+            ASSERT_EQ(values[0], static_cast<float>(51 / 255.0)) << t;
+            ASSERT_EQ(values[1], static_cast<float>(102 / 255.0)) << t;
+            ASSERT_EQ(values[2], 1.0f) << t;
+            values += 3;
+          }
+          if (!corners.uv) continue;
+          ASSERT_EQ(values[0], static_cast<float>(k)) << t;
+          ASSERT_EQ(values[1], static_cast<float>(-0.5 * k)) << t;
         }
       }
     }
@@ -282,16 +298,68 @@ TEST(PlyReader, CornerUvsComeWithTheirTrianglesAndReadPlyMakesWedges) {
               "8 0 0 1 0 1 1 0 1 7 4 0 1 2 3\n6 1 0 0.5 0 0.9 1 7 3 1 4 2\n");
   const TriangleStream stream = stream_triangles(path);
   EXPECT_EQ(stream.triangles, (std::vector<std::uint32_t>{0, 1, 2, 0, 2, 3, 1, 4, 2}));
-  EXPECT_EQ(stream.uvs, (std::vector<float>{0, 0, 1, 0, 1, 1, 0, 0, 1, 1, 0, 1, 1, 0, 0.5f, 0, 0.9f, 1}));
+  EXPECT_EQ(stream.corner_values, (std::vector<float>{0, 0, 1, 0, 1, 1, 0, 0, 1, 1, 0, 1, 1, 0, 0.5f, 0, 0.9f, 1}));
 
   // one vertex per (vertex, u, v) in first use order: vertex 2 twice, once per side of the seam
   const PlyMesh mesh = read_ok(path);
-  EXPECT_TRUE(mesh.info.corner_uvs);
+  EXPECT_EQ(mesh.info.corners, (CornerAttributes{.uv = true}));
   EXPECT_EQ(mesh.info.texture_files, std::vector<std::string>{"stone.png"});
   EXPECT_EQ(mesh.info.layout, (VertexLayout{.uv = true}));
   EXPECT_EQ(mesh.triangles, (std::vector<std::uint32_t>{0, 1, 2, 0, 2, 3, 1, 4, 5}));
   EXPECT_EQ(mesh.vertices, (std::vector<float>{0, 0, 0, 0, 0, 1, 0, 0, 1, 0, 1, 1, 0, 1, 1, 0, 1, 0, 0, 1,
                                                2, 0, 0, 0.5f, 0, 1, 1, 0, 0.9f, 1}));
+}
+
+// ---- colours per face ----
+
+// Face colours (uchar, with alpha) replace the vertices' colours: each corner gets its face's,
+// read_ply makes a vertex per (vertex, colour) in first-use order, and the kept colours' type is
+// the faces'. With texcoord as well each corner's values are its colour, then its (u, v).
+//   3---2      quad 0 1 2 3 (red)        -> (0 1 2) (0 2 3)
+//   |   |      triangle 1 4 2 (blue), after the colour
+//   0---1  4
+TEST(PlyReader, FaceColoursGoToTheirCornersAndReadPlyMakesWedges) {
+  ScratchDir dir;
+  const auto path = dir.file("face_colours.ply");
+  write_bytes(path,
+              "ply\nformat ascii 1.0\n"
+              "element vertex 5\nproperty float x\nproperty float y\nproperty float z\n"
+              "property float red\nproperty float green\nproperty float blue\n"
+              "element face 2\nproperty list uchar int vertex_indices\nproperty uchar red\n"
+              "property uchar green\nproperty uchar blue\nproperty uchar alpha\nend_header\n"
+              "0 0 0 0.5 0.5 0.5\n1 0 0 0.5 0.5 0.5\n1 1 0 0.5 0.5 0.5\n0 1 0 0.5 0.5 0.5\n2 0 0 0.5 0.5 0.5\n"
+              "4 0 1 2 3 255 0 0 9\n3 1 4 2 0 0 255 9\n");
+  const TriangleStream stream = stream_triangles(path);
+  EXPECT_EQ(stream.triangles, (std::vector<std::uint32_t>{0, 1, 2, 0, 2, 3, 1, 4, 2}));
+  EXPECT_EQ(stream.corner_values, (std::vector<float>{1, 0, 0, 1, 0, 0, 1, 0, 0, 1, 0, 0, 1, 0, 0, 1, 0, 0,
+                                                      0, 0, 1, 0, 0, 1, 0, 0, 1}));
+  const PlyMesh mesh = read_ok(path);
+  EXPECT_EQ(mesh.info.corners, (CornerAttributes{.color = true}));
+  EXPECT_EQ(mesh.info.layout, (VertexLayout{.color = true}));
+  EXPECT_EQ(mesh.info.color_type, PlyColorType::uchar);
+  EXPECT_EQ(mesh.triangles, (std::vector<std::uint32_t>{0, 1, 2, 0, 2, 3, 4, 5, 6}));
+  EXPECT_EQ(mesh.vertices, (std::vector<float>{0, 0, 0, 1, 0, 0, 1, 0, 0, 1, 0, 0, 1, 1, 0, 1, 0, 0,
+                                               0, 1, 0, 1, 0, 0, 1, 0, 0, 0, 0, 1, 2, 0, 0, 0, 0, 1,
+                                               1, 1, 0, 0, 0, 1}));
+
+  // float face colours and texcoord, vertices with normals and their own u, v (dropped)
+  write_bytes(path,
+              "ply\nformat ascii 1.0\n"
+              "element vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+              "property float nx\nproperty float ny\nproperty float nz\nproperty float u\nproperty float v\n"
+              "element face 1\nproperty float blue\nproperty list uchar float texcoord\nproperty float red\n"
+              "property list uchar int vertex_indices\nproperty float green\nend_header\n"
+              "0 0 0 0 0 1 9 9\n1 0 0 0 0 1 9 9\n0 1 0 0 0 1 9 9\n"
+              "0.75 6 0 0 1 0 0 1 0.25 3 0 1 2 0.5\n");
+  const TriangleStream both = stream_triangles(path);
+  EXPECT_EQ(both.corner_values,
+            (std::vector<float>{0.25f, 0.5f, 0.75f, 0, 0, 0.25f, 0.5f, 0.75f, 1, 0, 0.25f, 0.5f, 0.75f, 0, 1}));
+  const PlyMesh textured = read_ok(path);
+  EXPECT_EQ(textured.info.corners, (CornerAttributes{.color = true, .uv = true}));
+  EXPECT_EQ(textured.info.color_type, PlyColorType::float32);
+  EXPECT_EQ(textured.vertices, (std::vector<float>{0, 0, 0, 0, 0, 1, 0.25f, 0.5f, 0.75f, 0, 0,
+                                                   1, 0, 0, 0, 0, 1, 0.25f, 0.5f, 0.75f, 1, 0,
+                                                   0, 1, 0, 0, 0, 1, 0.25f, 0.5f, 0.75f, 0, 1}));
 }
 
 // The images a textured mesh's UVs index: every "comment TextureFile <name>", the keyword in any

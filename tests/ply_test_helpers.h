@@ -125,23 +125,33 @@ inline TestMesh strip_mesh(VertexLayout layout, bool byte_colors, std::uint32_t 
   return mesh;
 }
 
-// The mesh (VertexLayout floats with uv, `triangles` 3 per triangle) as a binary little-endian
-// PLY whose faces carry the texture coordinates (a `texcoord` list per face after its indices,
-// as MeshLab writes textured meshes) and whose vertices do not: vertices equal but for u, v are
-// written once, so a UV seam's two sides share one vertex. Colours as floats (exact). The header
-// names `texture` in a TextureFile comment, unless it is empty.
-inline void write_corner_uv_ply(const std::filesystem::path& path, VertexLayout layout,
-                                const std::vector<float>& vertices,
-                                const std::vector<std::uint32_t>& triangles,
-                                const std::string& texture = "") {
-  ASSERT_TRUE(layout.uv);
-  const std::size_t floats = layout.floats(), kept = layout.uv_offset();
+// The mesh (VertexLayout floats, `triangles` 3 per triangle) as a binary little-endian PLY whose
+// faces carry the attributes `corners` names and whose vertices do not: a colour per face (float
+// red, green, blue after the indices; every corner of a face must have its face's colour) and
+// texture coordinates per corner (a texcoord list after that, as MeshLab writes textured meshes).
+// Vertices equal but for those are written once, so a seam's two sides share one vertex. Colours
+// as floats (exact). The header names `texture` in a TextureFile comment, unless it is empty.
+inline void write_face_attribute_ply(const std::filesystem::path& path, VertexLayout layout,
+                                     const std::vector<float>& vertices,
+                                     const std::vector<std::uint32_t>& triangles, CornerAttributes corners,
+                                     const std::string& texture = "") {
+  ASSERT_TRUE(corners.any());
+  ASSERT_TRUE(layout.color || !corners.color);
+  ASSERT_TRUE(layout.uv || !corners.uv);
+  const std::size_t floats = layout.floats();
+  const VertexLayout kept{layout.normal, layout.color && !corners.color, layout.uv && !corners.uv};
+  auto kept_floats = [&](std::size_t v) {
+    const float* vertex = vertices.data() + v * floats;
+    std::vector<float> key(vertex, vertex + 3 + (layout.normal ? 3 : 0));
+    if (kept.color) key.insert(key.end(), vertex + layout.color_offset(), vertex + layout.color_offset() + 3);
+    if (kept.uv) key.insert(key.end(), vertex + layout.uv_offset(), vertex + layout.uv_offset() + 2);
+    return key;
+  };
   std::map<std::vector<float>, std::uint32_t> welded;
   std::vector<std::uint32_t> id(vertices.size() / floats);
   std::string vertex_bytes;
   for (std::size_t v = 0; v < id.size(); ++v) {
-    std::vector<float> key(vertices.begin() + static_cast<std::ptrdiff_t>(v * floats),
-                           vertices.begin() + static_cast<std::ptrdiff_t>(v * floats + kept));
+    const std::vector<float> key = kept_floats(v);
     const auto [it, added] = welded.try_emplace(key, static_cast<std::uint32_t>(welded.size()));
     if (added)
       for (float f : key) append_scalar(vertex_bytes, f, false);
@@ -150,19 +160,56 @@ inline void write_corner_uv_ply(const std::filesystem::path& path, VertexLayout 
   std::string text = "ply\nformat binary_little_endian 1.0\n";
   if (!texture.empty()) text += "comment TextureFile " + texture + "\n";
   text += "element vertex " + std::to_string(welded.size()) + "\nproperty float x\nproperty float y\nproperty float z\n";
-  if (layout.normal) text += "property float nx\nproperty float ny\nproperty float nz\n";
-  if (layout.color) text += "property float red\nproperty float green\nproperty float blue\n";
-  text += "element face " + std::to_string(triangles.size() / 3) +
-          "\nproperty list uchar int vertex_indices\nproperty list uchar float texcoord\nend_header\n";
-  text += vertex_bytes;
+  if (kept.normal) text += "property float nx\nproperty float ny\nproperty float nz\n";
+  if (kept.color) text += "property float red\nproperty float green\nproperty float blue\n";
+  if (kept.uv) text += "property float u\nproperty float v\n";
+  text += "element face " + std::to_string(triangles.size() / 3) + "\nproperty list uchar int vertex_indices\n";
+  if (corners.color) text += "property float red\nproperty float green\nproperty float blue\n";
+  if (corners.uv) text += "property list uchar float texcoord\n";
+  text += "end_header\n" + vertex_bytes;
   for (std::size_t t = 0; t < triangles.size(); t += 3) {
     append_scalar(text, std::uint8_t{3}, false);
     for (std::size_t c = 0; c < 3; ++c) append_scalar(text, static_cast<std::int32_t>(id[triangles[t + c]]), false);
-    append_scalar(text, std::uint8_t{6}, false);
-    for (std::size_t c = 0; c < 3; ++c)
-      for (std::size_t k = 0; k < 2; ++k) append_scalar(text, vertices[triangles[t + c] * floats + kept + k], false);
+    if (corners.color) {
+      const float* color = vertices.data() + triangles[t] * floats + layout.color_offset();
+      for (std::size_t c = 1; c < 3; ++c)
+        ASSERT_TRUE(std::equal(color, color + 3, vertices.data() + triangles[t + c] * floats + layout.color_offset()))
+            << "triangle " << t / 3 << "'s corners have different colours";
+      for (std::size_t k = 0; k < 3; ++k) append_scalar(text, color[k], false);
+    }
+    if (corners.uv) {
+      append_scalar(text, std::uint8_t{6}, false);
+      for (std::size_t c = 0; c < 3; ++c)
+        for (std::size_t k = 0; k < 2; ++k)
+          append_scalar(text, vertices[triangles[t + c] * floats + layout.uv_offset() + k], false);
+    }
   }
   write_bytes(path, text);
+}
+
+// The mesh with a colour per face, as a segmented scan has it: triangle t's corners get the
+// colour of band t / 97 (four colours in turn, exact in float), in vertices of their own where
+// their colour differs from the vertex's other triangles' (welded: equal wedges are one vertex).
+// The layout gains colour when it has none.
+inline TestMesh with_face_colours(VertexLayout layout, const std::vector<float>& vertices,
+                                  const std::vector<std::uint32_t>& triangles) {
+  static constexpr float kPalette[4][3] = {{1, 0.25f, 0}, {0, 0.5f, 1}, {0.75f, 0.75f, 0.25f}, {0.5f, 0, 0.5f}};
+  TestMesh out;
+  out.layout = VertexLayout{layout.normal, true, layout.uv};
+  const std::size_t floats = layout.floats(), out_floats = out.layout.floats();
+  std::map<std::vector<float>, std::uint32_t> welded;
+  for (std::size_t corner = 0; corner < triangles.size(); ++corner) {
+    const float* source = vertices.data() + std::size_t{triangles[corner]} * floats;
+    std::vector<float> wedge(out_floats);
+    std::copy(source, source + 3 + (layout.normal ? 3 : 0), wedge.begin());
+    const float* colour = kPalette[(corner / 3 / 97) % 4];
+    std::copy(colour, colour + 3, wedge.begin() + out.layout.color_offset());
+    if (layout.uv) std::copy(source + layout.uv_offset(), source + layout.uv_offset() + 2, wedge.begin() + out.layout.uv_offset());
+    const auto [it, added] = welded.try_emplace(wedge, static_cast<std::uint32_t>(welded.size()));
+    if (added) out.vertices.insert(out.vertices.end(), wedge.begin(), wedge.end());
+    out.triangles.push_back(it->second);
+  }
+  return out;
 }
 
 // Bit-exact float comparison (so -0.0 != 0.0 and NaN patterns matter).

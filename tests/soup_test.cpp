@@ -438,59 +438,76 @@ TEST(Soup, FacesBeforeVerticesGiveTheSameSoup) {
   }
 }
 
-// Corner UVs (a texcoord list per face, vertices without u, v: test::write_corner_uv_ply) give
-// the soup of the same mesh with a vertex per wedge, on every path and in every order, with or
-// without a sink; a mesh sink is never offered a mesh whose UVs are per corner. The mesh has a
-// seam: the right half's triangles use copies of their vertices with u + 1, which the corner-UV
-// file welds back to one vertex each.
-TEST(Soup, CornerUvsGiveTheSoupOfTheirWedges) {
+// Attributes per face corner (a texcoord list per face, a colour per face; vertices without
+// them: test::write_face_attribute_ply) give the soup of the same mesh with a vertex per wedge, on
+// every path and in every order, with or without a sink; a mesh sink is never offered a mesh
+// whose attributes are per corner. The mesh has a UV seam: the right half's triangles use copies
+// of their vertices with u + 1, which the file welds back to one vertex each when the UVs are on
+// the faces; with face colours, every 97 triangles have another colour.
+TEST(Soup, CornerAttributesGiveTheSoupOfTheirWedges) {
   WorkDir dir;
-  GridMesh mesh = make_grid(100, 60);
-  const std::size_t floats = mesh.layout.floats();
-  const auto n = static_cast<std::uint32_t>(mesh.vertices.size() / floats);
+  GridMesh grid = make_grid(100, 60);
+  const std::size_t floats = grid.layout.floats();
+  const auto n = static_cast<std::uint32_t>(grid.vertices.size() / floats);
   for (std::uint32_t v = 0; v < n; ++v) {
-    mesh.vertices.insert(mesh.vertices.end(), mesh.vertices.begin() + v * floats,
-                         mesh.vertices.begin() + (v + 1) * floats);
-    mesh.vertices[mesh.vertices.size() - 2] += 1.0f;
+    grid.vertices.insert(grid.vertices.end(), grid.vertices.begin() + v * floats,
+                         grid.vertices.begin() + (v + 1) * floats);
+    grid.vertices[grid.vertices.size() - 2] += 1.0f;
   }
-  for (std::size_t t = 0; t + 3 < mesh.triangles.size(); t += 3)  // the degenerate one stays
-    if (mesh.vertices[mesh.triangles[t] * floats] >= 50.0f)
-      for (std::size_t c = 0; c < 3; ++c) mesh.triangles[t + c] += n;
-  test::write_corner_uv_ply(dir.file("corner.ply"), mesh.layout, mesh.vertices, mesh.triangles);
-  const std::string expected =
-      as_string(dereference_in_memory(mesh.vertices, mesh.triangles, mesh.layout));
-  for (const SoupOrder order : {SoupOrder::any, SoupOrder::by_triangle}) {
-    for (const std::uint64_t budget : {kMinSoupBudget, std::uint64_t{1} << 20}) {
-      for (const bool force : {false, true}) {
-        for (const bool sink : {false, true}) {
-          if (sink && budget == kMinSoupBudget) continue;  // the sink's path is the file's
-          const auto where = ::testing::Message() << "any " << (order == SoupOrder::any) << " budget "
-                                                  << budget << " force " << force << " sink " << sink;
-          SoupOptions options = options_in(dir, budget);
-          options.order = order;
-          options.force_out_of_core = force;
-          std::string received;
-          if (sink) {
-            options.sink = [&](std::span<const std::byte> records) {
-              received.append(reinterpret_cast<const char*>(records.data()), records.size());
+  for (std::size_t t = 0; t + 3 < grid.triangles.size(); t += 3)  // the degenerate one stays
+    if (grid.vertices[grid.triangles[t] * floats] >= 50.0f)
+      for (std::size_t c = 0; c < 3; ++c) grid.triangles[t + c] += n;
+  const test::TestMesh coloured = test::with_face_colours(grid.layout, grid.vertices, grid.triangles);
+  ASSERT_EQ(coloured.layout, grid.layout);
+  for (const CornerAttributes corners : {CornerAttributes{.uv = true}, CornerAttributes{.color = true},
+                                         CornerAttributes{.color = true, .uv = true}}) {
+    const std::vector<float>& vertices = corners.color ? coloured.vertices : grid.vertices;
+    const std::vector<std::uint32_t>& triangles = corners.color ? coloured.triangles : grid.triangles;
+    const auto file = dir.file("corner.ply");
+    test::write_face_attribute_ply(file, grid.layout, vertices, triangles, corners);
+    auto reader = PlyReader::open(file);
+    ASSERT_TRUE(reader.ok()) << reader.status().message();
+    const std::uint64_t file_vertices = reader.value()->info().vertex_count;
+    reader.value().reset();
+    if (corners.uv) {
+      EXPECT_EQ(file_vertices, n);  // the copies welded back
+    }
+    const std::string expected = as_string(dereference_in_memory(vertices, triangles, grid.layout));
+    for (const SoupOrder order : {SoupOrder::any, SoupOrder::by_triangle}) {
+      for (const std::uint64_t budget : {kMinSoupBudget, std::uint64_t{1} << 20}) {
+        for (const bool force : {false, true}) {
+          for (const bool sink : {false, true}) {
+            if (sink && budget == kMinSoupBudget) continue;  // the sink's path is the file's
+            const auto where = ::testing::Message()
+                               << "colour " << corners.color << " uv " << corners.uv << " any "
+                               << (order == SoupOrder::any) << " budget " << budget << " force " << force
+                               << " sink " << sink;
+            SoupOptions options = options_in(dir, budget);
+            options.order = order;
+            options.force_out_of_core = force;
+            std::string received;
+            if (sink) {
+              options.sink = [&](std::span<const std::byte> records) {
+                received.append(reinterpret_cast<const char*>(records.data()), records.size());
+                return Status{};
+              };
+            }
+            options.mesh_sink.accepts = [](VertexLayout, std::uint64_t, std::uint64_t) { return true; };
+            options.mesh_sink.consume = [](const SoupMesh&) {
+              ADD_FAILURE() << "mesh sink called for attributes per corner";
               return Status{};
             };
+            auto r = build_soup(file, options);
+            ASSERT_TRUE(r.ok()) << r.status().message() << where;
+            EXPECT_EQ(r->layout, grid.layout) << where;
+            EXPECT_EQ(r->in_core, !force && budget > kMinSoupBudget) << where;
+            EXPECT_EQ(r->vertex_count, file_vertices) << where;
+            const std::string soup = sink ? received : read_bytes(r->soup.path());
+            // corner values are patched in in triangle order, whatever order was asked for
+            EXPECT_TRUE(soup == expected) << where;
           }
-          options.mesh_sink.accepts = [](VertexLayout, std::uint64_t, std::uint64_t) { return true; };
-          options.mesh_sink.consume = [](const SoupMesh&) {
-            ADD_FAILURE() << "mesh sink called for corner UVs";
-            return Status{};
-          };
-          auto r = build_soup(dir.file("corner.ply"), options);
-          ASSERT_TRUE(r.ok()) << r.status().message() << where;
-          EXPECT_EQ(r->layout, mesh.layout) << where;
-          EXPECT_EQ(r->in_core, !force && budget > kMinSoupBudget) << where;
-          EXPECT_EQ(r->vertex_count, n) << where;  // the copies welded back
-          const std::string soup = sink ? received : read_bytes(r->soup.path());
-          // corner UVs are patched in in triangle order, whatever order was asked for
-          EXPECT_TRUE(soup == expected) << where;
+          EXPECT_EQ(dir.work_file_count(), 0u);
         }
-        EXPECT_EQ(dir.work_file_count(), 0u);
       }
     }
   }

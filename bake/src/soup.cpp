@@ -114,12 +114,14 @@ class ProgressOutput final : public RecordOutput {
   std::uint64_t done_ = 0;
 };
 
-// Soup records in triangle order get each corner's (u, v) from the corner UV file the split
-// wrote (PlyInfo::corner_uvs: 6 floats per triangle, triangle order) on their way to `inner`.
-class CornerUvOutput final : public RecordOutput {
+// Soup records in triangle order get each corner's values from the corner file the split wrote
+// (PlyInfo::corners: 3 * corners.floats() floats per triangle, triangle order) on their way to
+// `inner`.
+class CornerValuesOutput final : public RecordOutput {
  public:
-  CornerUvOutput(RecordOutput& inner, VertexLayout layout, RecordReader uvs)
-      : inner_(inner), layout_(layout), uvs_(std::move(uvs)) {}
+  CornerValuesOutput(RecordOutput& inner, VertexLayout layout, CornerAttributes corners, RecordReader values)
+      : inner_(inner), layout_(layout), corner_bytes_(corners.floats() * sizeof(float)),
+        first_byte_(corners.first_offset(layout) * sizeof(float)), values_(std::move(values)) {}
   Result<std::span<std::byte>> reserve(std::size_t max_records) override {
     auto space = inner_.reserve(max_records);
     if (space.ok()) reserved_ = space.value();
@@ -127,34 +129,35 @@ class CornerUvOutput final : public RecordOutput {
   }
   Status commit(std::size_t records) override {
     const std::size_t record_bytes = soup_record_bytes(layout_);
-    const std::size_t uv_bytes = layout_.uv_offset() * sizeof(float);
     for (std::size_t done = 0; done < records;) {
-      auto block = uvs_.read(records - done);
+      auto block = values_.read(records - done);
       if (!block.ok()) return block.status();
       if (block->empty())
-        return io_error("corner UV file '" + uvs_.path().string() + "' ended before the soup");
-      const std::size_t n = block->size() / kCornerUvBytes;
+        return io_error("corner file '" + values_.path().string() + "' ended before the soup");
+      const std::size_t n = block->size() / (3 * corner_bytes_);
       for (std::size_t i = 0; i < n; ++i, ++next_) {
         std::byte* record = reserved_.data() + (done + i) * record_bytes;
         if (load_soup_triangle_id(record, layout_) != TriangleId{next_})
-          return io_error("corner UV file '" + uvs_.path().string() + "' is out of step with the soup at triangle " +
+          return io_error("corner file '" + values_.path().string() + "' is out of step with the soup at triangle " +
                           std::to_string(next_));
         for (int c = 0; c < 3; ++c)
-          std::memcpy(record + soup_corner_offset(layout_, c) + uv_bytes,
-                      block->data() + i * kCornerUvBytes + static_cast<std::size_t>(c) * 2 * sizeof(float),
-                      2 * sizeof(float));
+          std::memcpy(record + soup_corner_offset(layout_, c) + first_byte_,
+                      block->data() + (3 * i + static_cast<std::size_t>(c)) * corner_bytes_, corner_bytes_);
       }
       done += n;
     }
     return inner_.commit(records);
   }
 
-  static constexpr std::size_t kCornerUvBytes = 6 * sizeof(float);
+  // Bytes per triangle of the corner file.
+  static std::size_t triangle_bytes(CornerAttributes corners) { return 3 * corners.floats() * sizeof(float); }
 
  private:
   RecordOutput& inner_;
   VertexLayout layout_;
-  RecordReader uvs_;
+  std::size_t corner_bytes_;  // one corner's values
+  std::size_t first_byte_;    // their offset within a corner of a record
+  RecordReader values_;
   std::span<std::byte> reserved_;
   std::uint32_t next_ = 0;  // triangle id of the next record
 };
@@ -171,13 +174,13 @@ class SoupBuilder {
     layout_ = info.layout;
     split_total_ = info.vertex_count + info.face_count;
     face_count_ = info.face_count;
-    corner_uvs_ = info.corner_uvs;
+    corners_ = info.corners;
     const std::uint64_t vertex_array_bytes = info.vertex_count * layout_.bytes();
     const bool in_core =
         !options_.force_out_of_core && vertex_array_bytes <= options_.memory_budget_bytes / 2;
     Status status;
-    // an indexed mesh has one u, v per vertex: corner UVs take the records path
-    if (in_core && !corner_uvs_ && options_.mesh_sink.consume &&
+    // an indexed mesh has one value per vertex: attributes per corner take the records path
+    if (in_core && !corners_.any() && options_.mesh_sink.consume &&
         options_.mesh_sink.accepts(layout_, info.vertex_count, info.face_count)) {
       bool fanned_out = false;
       status = run_mesh(info.vertex_count, info.face_count, fanned_out);
@@ -246,19 +249,21 @@ class SoupBuilder {
   Status split(SplitSinks sinks, const RecordSorter* sorter) {
     const auto start = std::chrono::steady_clock::now();
     sinks.progress = [this](std::uint64_t done) { progress("split", done, split_total_); };
-    std::optional<RecordWriter> uv_writer;
-    if (corner_uvs_) {
-      corner_uv_file_ = make_temp_file(options_.work_dir, "corner-uvs");
-      auto writer = RecordWriter::create(corner_uv_file_.path(), CornerUvOutput::kCornerUvBytes, io_);
+    std::optional<RecordWriter> corner_writer;
+    if (corners_.any()) {
+      corner_file_ = make_temp_file(options_.work_dir, "corners");
+      const std::size_t triangle_bytes = CornerValuesOutput::triangle_bytes(corners_);
+      auto writer = RecordWriter::create(corner_file_.path(), triangle_bytes, io_);
       if (!writer.ok()) return writer.status();
-      uv_writer.emplace(std::move(writer).value());
-      sinks.corner_uvs = [&](std::span<const float> uvs) {
-        return uv_writer->append(reinterpret_cast<const std::byte*>(uvs.data()), uvs.size() / 6);
+      corner_writer.emplace(std::move(writer).value());
+      sinks.corner_values = [&, triangle_bytes](std::span<const float> values) {
+        return corner_writer->append(reinterpret_cast<const std::byte*>(values.data()),
+                                     values.size_bytes() / triangle_bytes);
       };
     }
     auto split = split_ply(*reader_, io_, sinks);
     if (!split.ok()) return split.status();
-    if (uv_writer) OCTOLOD_RETURN_IF_ERROR(uv_writer->finish());
+    if (corner_writer) OCTOLOD_RETURN_IF_ERROR(corner_writer->finish());
     reader_.reset();  // frees the PLY buffers before the next phase
     result_.vertex_count = split->vertex_count;
     result_.triangle_count = split->triangle_count;
@@ -318,7 +323,7 @@ class SoupBuilder {
     // batch while splitting, then the output batch and the soup writer. The array is at most
     // half the budget, so the sort gets at least 1/4 of it minus the reader's file buffer.
     const std::uint64_t sort_budget =
-        options_.memory_budget_bytes - vertex_array_bytes - (corner_uvs_ ? 3 : 2) * io_ - kPlyFileBuffer;
+        options_.memory_budget_bytes - vertex_array_bytes - (corners_.any() ? 3 : 2) * io_ - kPlyFileBuffer;
     // Triangle order for either SoupOrder: the split's order already, so the sort only holds
     // the records (spilling runs when they do not fit) until the vertex array is complete.
     auto sorter = RecordSorter::create(
@@ -341,10 +346,10 @@ class SoupBuilder {
     progress("dereference", 0, result_.triangle_count);
 
     // In use while the soup is written: the vertex array, the sort, the output batch (and the
-    // corner UV reader).
-    auto soup = open_output(true, vertex_array_bytes + sort_budget + (corner_uvs_ ? 2 : 1) * io_);
+    // corner file's reader).
+    auto soup = open_output(true, vertex_array_bytes + sort_budget + (corners_.any() ? 2 : 1) * io_);
     if (!soup.ok()) return soup.status();
-    auto last = with_corner_uvs(*soup.value());
+    auto last = with_corner_values(*soup.value());
     if (!last.ok()) return last.status();
     ProgressOutput out(*last.value(), [this](std::uint64_t done) {
       progress("dereference", done, result_.triangle_count);
@@ -365,12 +370,12 @@ class SoupBuilder {
     // of what six io buffers and the PLY reader's file buffer leave. The window pass runs
     // inside the split, with the PLY reader, the triangle batch, the vertex reader and the
     // output batch; the other half of the budget is the soup's consumer's
-    // (SoupOptions::sink_start), or the order sort's for SoupOrder::by_triangle, which corner
-    // UVs take too (they are patched into the records in triangle order, read through one more
+    // (SoupOptions::sink_start), or the order sort's for SoupOrder::by_triangle, which
+    // attributes per corner take too (they are patched into the records in triangle order, read through one more
     // io buffer, which the split wrote through another).
-    const bool by_triangle = options_.order == SoupOrder::by_triangle || corner_uvs_;
+    const bool by_triangle = options_.order == SoupOrder::by_triangle || corners_.any();
     const std::uint64_t quarter =
-        (options_.memory_budget_bytes - (corner_uvs_ ? 7 : 6) * io_ - kPlyFileBuffer) / 4;
+        (options_.memory_budget_bytes - (corners_.any() ? 7 : 6) * io_ - kPlyFileBuffer) / 4;
     TempFile vertex_file = make_temp_file(options_.work_dir, "vertices");
     TempFile triangle_file;  // only when faces come before the last vertex
     std::optional<RecordWriter> vertex_writer;
@@ -486,11 +491,11 @@ class SoupBuilder {
     vertex_file.remove();
     if (order) {
       OCTOLOD_RETURN_IF_ERROR(order->finish());
-      // In use: the merging order sort, the output batch (and the corner UV reader).
-      auto opened = open_output(false, quarter + (corner_uvs_ ? 2 : 1) * io_);
+      // In use: the merging order sort, the output batch (and the corner file's reader).
+      auto opened = open_output(false, quarter + (corners_.any() ? 2 : 1) * io_);
       if (!opened.ok()) return opened.status();
       soup = std::move(opened).value();
-      auto last = with_corner_uvs(*soup);
+      auto last = with_corner_values(*soup);
       if (!last.ok()) return last.status();
       OCTOLOD_RETURN_IF_ERROR(drain_order(*order, *last.value()));
     }
@@ -533,14 +538,15 @@ class SoupBuilder {
     return {};
   }
 
-  // The records' way into `soup` once they come in triangle order: through a CornerUvOutput
-  // when the faces carry corner UVs (kept as corner_uv_output_), else straight.
-  Result<RecordOutput*> with_corner_uvs(RecordOutput& soup) {
-    if (!corner_uvs_) return &soup;
-    auto uvs = RecordReader::open(corner_uv_file_.path(), CornerUvOutput::kCornerUvBytes, io_);
-    if (!uvs.ok()) return uvs.status();
-    corner_uv_output_ = std::make_unique<CornerUvOutput>(soup, layout_, std::move(uvs).value());
-    return corner_uv_output_.get();
+  // The records' way into `soup` once they come in triangle order: through a
+  // CornerValuesOutput when the faces give their corners attributes (kept as corner_output_),
+  // else straight.
+  Result<RecordOutput*> with_corner_values(RecordOutput& soup) {
+    if (!corners_.any()) return &soup;
+    auto values = RecordReader::open(corner_file_.path(), CornerValuesOutput::triangle_bytes(corners_), io_);
+    if (!values.ok()) return values.status();
+    corner_output_ = std::make_unique<CornerValuesOutput>(soup, layout_, corners_, std::move(values).value());
+    return corner_output_.get();
   }
 
   // SoupOrder::by_triangle: the order sort's stream written to the soup.
@@ -581,9 +587,9 @@ class SoupBuilder {
   double consume_seconds_ = 0;  // inside SoupOptions::mesh_sink.consume
   double window_in_split_seconds_ = 0;  // the window pass run from the split's triangle sink
   TempFile soup_file_;
-  bool corner_uvs_ = false;      // the faces carry texture coordinates per corner (PlyInfo)
-  TempFile corner_uv_file_;      // and the split wrote them here, in triangle order
-  std::unique_ptr<CornerUvOutput> corner_uv_output_;
+  CornerAttributes corners_;     // what the faces give their corners (PlyInfo)
+  TempFile corner_file_;         // the split wrote their values here, in triangle order
+  std::unique_ptr<CornerValuesOutput> corner_output_;
   SoupResult result_;
 };
 

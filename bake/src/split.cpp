@@ -19,9 +19,10 @@ Result<SplitResult> split_ply(PlyReader& reader, std::size_t batch_bytes, const 
   result.layout = reader.info().layout;
   result.vertex_count = reader.info().vertex_count;
   const std::size_t floats = result.layout.floats();
-  if (reader.info().corner_uvs && !sinks.corner_uvs)
+  const std::size_t corner_floats = 3 * std::size_t{reader.info().corners.floats()};  // per triangle
+  if (corner_floats != 0 && !sinks.corner_values)
     return unsupported_error(reader.info().path.string() +
-                             ": the faces' texture coordinates per corner (texcoord) have no place here");
+                             ": the faces' attributes per corner (texcoord, face colours) have no place here");
   const std::size_t batch_records = std::max<std::size_t>(1, batch_bytes / sizeof(TriangleRecord));
   const PageArray<TriangleRecord> batch(batch_records);
   std::uint64_t done = 0;
@@ -60,8 +61,9 @@ Result<SplitResult> split_ply(PlyReader& reader, std::size_t batch_bytes, const 
                                     TriangleId{static_cast<std::uint32_t>(b.first + start + i)}};
         }
         OCTOLOD_RETURN_IF_ERROR(sinks.triangles(std::span<const TriangleRecord>(batch.get(), n)));
-        if (reader.info().corner_uvs)
-          OCTOLOD_RETURN_IF_ERROR(sinks.corner_uvs(b.corner_uvs.subspan(6 * start, 6 * n)));
+        if (corner_floats != 0)
+          OCTOLOD_RETURN_IF_ERROR(
+              sinks.corner_values(b.corner_values.subspan(corner_floats * start, corner_floats * n)));
       }
       result.triangle_count = b.first + count;
       done += count;

@@ -24,10 +24,11 @@ struct SplitSinks {
   std::function<Status(std::uint64_t first, std::span<const float> vertices)> vertices;
   // Consecutive triangles; the span is valid during the call only.
   std::function<Status(std::span<const TriangleRecord> triangles)> triangles;
-  // Required when the faces carry texture coordinates per corner (PlyInfo::corner_uvs), else
-  // never called: right after each `triangles` call, (u, v) of each corner of those triangles
-  // (6 floats per triangle); the span is valid during the call only.
-  std::function<Status(std::span<const float> corner_uvs)> corner_uvs;
+  // Required when the faces give their corners attributes (PlyInfo::corners), else never
+  // called: right after each `triangles` call, the values of each corner of those triangles
+  // (3 * PlyInfo::corners.floats() per triangle, PlyBatch::corner_values); the span is valid
+  // during the call only.
+  std::function<Status(std::span<const float> corner_values)> corner_values;
   // Optional: called once before the first triangle batch if every vertex came before it (the
   // vertex element precedes the faces), with the bounds of all vertices. An error it returns
   // ends the split.
@@ -47,12 +48,12 @@ struct SplitResult {
 
 // Reads `reader` to its end. `batch_bytes` bounds the triangle record batch (at least one
 // record). unsupported when the triangles would need ids of 2^32 or more, or when the faces
-// carry corner UVs and `sinks` has no corner_uvs.
+// give their corners attributes and `sinks` has no corner_values.
 Result<SplitResult> split_ply(PlyReader& reader, std::size_t batch_bytes, const SplitSinks& sinks);
 
 // The seed's two files: `vertex_path` (vertex records) and `triangle_path` (TriangleRecord),
 // each written through a buffer of `buffer_bytes`. Files are removed again on error. Inputs with
-// corner UVs are refused (unsupported): the two files have no place for them.
+// attributes per face corner are refused (unsupported): the two files have no place for them.
 Result<SplitResult> split_ply_to_files(const std::filesystem::path& ply,
                                        const std::filesystem::path& vertex_path,
                                        const std::filesystem::path& triangle_path,

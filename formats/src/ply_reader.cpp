@@ -38,7 +38,8 @@ enum class Role { skip, vertices, faces };
 
 struct PropertyPlan {
   ply::Property property;
-  std::uint32_t slot = kNoSlot;  // vertices: float offset of the value within a decoded vertex
+  std::uint32_t slot = kNoSlot;  // vertices: float offset of the value within a decoded vertex;
+                                 // faces' colours: 0, 1, 2 for red, green, blue
   double divisor = 0.0;          // integer colours: divided by their type's maximum; 0 = as is
   int axis = -1;                 // positions: 0, 1, 2 for x, y, z (less the reader's origin)
   bool is_index_list = false;    // faces: the vertex_indices / vertex_index list
@@ -78,7 +79,27 @@ std::optional<std::array<int, N>> find_group(const ply::Element& element,
   return std::nullopt;
 }
 
-// Vertex semantics: which properties become which floats of VertexLayout.
+// The first complete colour group of `element`.
+std::optional<std::array<int, 3>> find_color(const ply::Element& element) {
+  return find_group<3>(element, {{"red", "green", "blue"}, {"diffuse_red", "diffuse_green", "diffuse_blue"}});
+}
+
+// Colour properties `color` of `plan` to slots first_slot + 0, 1, 2, integer types divided by
+// their maximum; info.color_type from the red's type.
+void plan_color(const ply::Element& element, const std::array<int, 3>& color, std::uint32_t first_slot,
+                ElementPlan& plan, PlyInfo& info) {
+  for (std::uint32_t i = 0; i < 3; ++i) {
+    PropertyPlan& p = plan.properties[static_cast<std::size_t>(color[i])];
+    p.slot = first_slot + i;
+    if (ply::is_integer(p.property.type)) p.divisor = ply::max_value(p.property.type);
+  }
+  const ScalarType red = element.properties[static_cast<std::size_t>(color[0])].type;
+  info.color_type = ply::is_integer(red) ? PlyColorType::uchar : PlyColorType::float32;
+}
+
+// Vertex semantics: which properties become which floats of VertexLayout. Attributes the faces
+// give their corners (info.corners, planned before) are in the layout, and the vertices' own
+// are skipped.
 Status plan_vertices(const ply::Element& element, const std::string& path, ElementPlan& plan,
                      PlyInfo& info) {
   auto error = [&](const std::string& what) {
@@ -92,12 +113,14 @@ Status plan_vertices(const ply::Element& element, const std::string& path, Eleme
   }
   const auto position = find_group<3>(element, {{"x", "y", "z"}});
   const auto normal = find_group<3>(element, {{"nx", "ny", "nz"}});
-  const auto color = find_group<3>(element, {{"red", "green", "blue"}, {"diffuse_red", "diffuse_green", "diffuse_blue"}});
-  const auto uv = find_group<2>(element, {{"u", "v"},
-                                          {"s", "t"},
-                                          {"texture_u", "texture_v"},
-                                          {"texture_s", "texture_t"}});
-  info.layout = VertexLayout{normal.has_value(), color.has_value(), uv.has_value()};
+  const auto color = info.corners.color ? std::nullopt : find_color(element);
+  const auto uv = info.corners.uv ? std::nullopt
+                                  : find_group<2>(element, {{"u", "v"},
+                                                            {"s", "t"},
+                                                            {"texture_u", "texture_v"},
+                                                            {"texture_s", "texture_t"}});
+  info.layout = VertexLayout{normal.has_value(), color.has_value() || info.corners.color,
+                             uv.has_value() || info.corners.uv};
 
   auto assign = [&](int property, std::uint32_t slot) {
     plan.properties[static_cast<std::size_t>(property)].slot = slot;
@@ -110,22 +133,15 @@ Status plan_vertices(const ply::Element& element, const std::string& path, Eleme
   }
   if (normal)
     for (std::uint32_t i = 0; i < 3; ++i) assign((*normal)[i], VertexLayout::normal_offset() + i);
-  if (color) {
-    for (std::uint32_t i = 0; i < 3; ++i) {
-      PropertyPlan& p = plan.properties[static_cast<std::size_t>((*color)[i])];
-      p.slot = info.layout.color_offset() + i;
-      if (ply::is_integer(p.property.type)) p.divisor = ply::max_value(p.property.type);
-    }
-    const ScalarType red = element.properties[static_cast<std::size_t>((*color)[0])].type;
-    info.color_type = ply::is_integer(red) ? PlyColorType::uchar : PlyColorType::float32;
-  }
+  if (color) plan_color(element, *color, info.layout.color_offset(), plan, info);
   if (uv)
     for (std::uint32_t i = 0; i < 2; ++i) assign((*uv)[i], info.layout.uv_offset() + i);
   return {};
 }
 
-// Face semantics: the index list, whose items must be integers, and the texture coordinates
-// per corner (`texcoord`, MeshLab's and photogrammetry tools' name), whose items must be floats.
+// Face semantics: the index list, whose items must be integers, the texture coordinates per
+// corner (`texcoord`, MeshLab's and photogrammetry tools' name), whose items must be floats, and
+// a colour per face.
 Status plan_faces(const ply::Element& element, const std::string& path, ElementPlan& plan,
                   PlyInfo& info) {
   int list = element.find("vertex_indices");
@@ -140,13 +156,17 @@ Status plan_faces(const ply::Element& element, const std::string& path, ElementP
     return error("face property '" + p.property.name + "' has non-integer items (" +
                  std::string(ply::to_string(p.property.type)) + ")");
   p.is_index_list = true;
+  if (const auto color = find_color(element)) {
+    plan_color(element, *color, 0, plan, info);
+    info.corners.color = true;
+  }
   const int uvs = element.find("texcoord");
   if (uvs < 0) return {};
   PropertyPlan& t = plan.properties[static_cast<std::size_t>(uvs)];
   if (!t.property.is_list || ply::is_integer(t.property.type))
     return error("face property 'texcoord' is not a list of floats (u, v per corner)");
   t.is_uv_list = true;
-  info.corner_uvs = true;
+  info.corners.uv = true;
   return {};
 }
 
@@ -237,20 +257,22 @@ Result<Plan> build_plan(const ply::Header& header, const ply::FileBuffer& in) {
     if (element.name == "vertex") {
       vertex = &element;
       p.role = Role::vertices;
-      OCTOLOD_RETURN_IF_ERROR(plan_vertices(element, path, p, plan.info));
       plan.info.vertex_count = element.count;
     } else if (element.name == "face") {
       p.role = Role::faces;
-      OCTOLOD_RETURN_IF_ERROR(plan_faces(element, path, p, plan.info));
       plan.info.face_count = element.count;
     }
     plan.elements.push_back(std::move(p));
   }
   if (vertex == nullptr)
     return bad_input_error(ply::message_at_line(path, header.lines, "the header declares no 'vertex' element"));
-  // uv is the layout's last group: the vertices' other slots stay where plan_vertices put them,
-  // and the uv slots, which no vertex property fills, stay zero
-  if (plan.info.corner_uvs) plan.info.layout.uv = true;
+  // faces first: what they give their corners decides the vertices' layout
+  for (std::size_t i = 0; i < header.elements.size(); ++i)
+    if (plan.elements[i].role == Role::faces)
+      OCTOLOD_RETURN_IF_ERROR(plan_faces(header.elements[i], path, plan.elements[i], plan.info));
+  for (std::size_t i = 0; i < header.elements.size(); ++i)
+    if (plan.elements[i].role == Role::vertices)
+      OCTOLOD_RETURN_IF_ERROR(plan_vertices(header.elements[i], path, plan.elements[i], plan.info));
   OCTOLOD_RETURN_IF_ERROR(check_counts(header, plan, in.file_size(), path));
   if (vertex->count > std::numeric_limits<std::uint32_t>::max())
     return unsupported_error(ply::message_at_line(
@@ -323,7 +345,8 @@ class StreamReader final : public PlyReader {
       batch.kind = PlyBatch::Kind::triangles;
       batch.first = triangles_emitted_;
       batch.triangles = std::span<const std::uint32_t>(triangles_.data(), produced * 3);
-      if (info_.corner_uvs) batch.corner_uvs = std::span<const float>(corner_uvs_.data(), produced * 6);
+      if (info_.corners.any())
+        batch.corner_values = std::span<const float>(corner_values_.data(), produced * 3 * info_.corners.floats());
       triangles_emitted_ += produced;
       return {};
     }
@@ -413,17 +436,9 @@ class StreamReader final : public PlyReader {
           if (origin_pending_ && std::isfinite(value)) origin = std::round(value);
           value -= origin;
         }
-        const float converted = static_cast<float>(p.divisor != 0.0 ? value / p.divisor : value);
-        if (!std::isfinite(converted))
-          return error_at(where, "vertex " + std::to_string(index_) + " has a non-finite " +
-                                     p.property.name + " (" +
-                                     (std::isnan(converted) ? "NaN" : "Inf") +
-                                     (std::isfinite(value) ? " after conversion to float" : "") +
-                                     ")");
-        if (std::abs(converted) > kMaxVertexValue)
-          return error_at(where, "vertex " + std::to_string(index_) + " has a " + p.property.name + " of " +
-                                     beyond_max_vertex_value(converted));
-        vertex[p.slot] = converted;
+        auto converted = convert_value(where, "vertex", p, value);
+        if (!converted.ok()) return converted.status();
+        vertex[p.slot] = converted.value();
       }
       OCTOLOD_RETURN_IF_ERROR(source_.end_entry());
       origin_pending_ = false;
@@ -485,12 +500,28 @@ class StreamReader final : public PlyReader {
     return {};
   }
 
+  // `value`, read at `where` for property `p` of entry index_ of the element `entry` names
+  // ("vertex"), as the float a batch holds: divided by p.divisor, finite, within
+  // ±kMaxVertexValue.
+  Result<float> convert_value(std::uint64_t where, const char* entry, const PropertyPlan& p,
+                              double value) const {
+    const float converted = static_cast<float>(p.divisor != 0.0 ? value / p.divisor : value);
+    if (!std::isfinite(converted))
+      return error_at(where, std::string(entry) + " " + std::to_string(index_) + " has a non-finite " +
+                                 p.property.name + " (" + (std::isnan(converted) ? "NaN" : "Inf") +
+                                 (std::isfinite(value) ? " after conversion to float" : "") + ")");
+    if (std::abs(converted) > kMaxVertexValue)
+      return error_at(where, std::string(entry) + " " + std::to_string(index_) + " has a " +
+                                 p.property.name + " of " + beyond_max_vertex_value(converted));
+    return converted;
+  }
+
   // ---- faces ----
 
   Status decode_faces(const ElementPlan& element, std::size_t& produced) {
     const std::size_t room = batch_bytes_ / (3 * sizeof(std::uint32_t));
     if (triangles_.empty()) triangles_.resize(room * 3);
-    if (info_.corner_uvs) return decode_faces_with_uvs(element, room, produced);
+    if (info_.corners.any()) return decode_faces_with_corners(element, room, produced);
     if constexpr (Source::kBinary) {
       const PropertyPlan& p = element.properties.front();
       if (!face_.started && element.properties.size() == 1 &&
@@ -602,20 +633,25 @@ class StreamReader final : public PlyReader {
     return {};
   }
 
-  // Faces with texture coordinates per corner: each entry is read whole (its indices and its
-  // texcoord list, in either order), then fanned out; a fan larger than the batch's room
-  // continues in the next batch. index_ moves on once its whole fan is out.
-  Status decode_faces_with_uvs(const ElementPlan& element, std::size_t room, std::size_t& produced) {
-    if (corner_uvs_.empty()) corner_uvs_.resize(room * 6);
+  // Faces that give their corners attributes (info_.corners): each entry is read whole (its
+  // indices, texcoord list and colour, in any order), then fanned out; a fan larger than the
+  // batch's room continues in the next batch. index_ moves on once its whole fan is out.
+  Status decode_faces_with_corners(const ElementPlan& element, std::size_t room, std::size_t& produced) {
+    const std::size_t floats = info_.corners.floats();
+    if (corner_values_.empty()) corner_values_.resize(room * 3 * floats);
     for (;;) {
       // the polygon read last: triangles (p0, p[k], p[k + 1]) as decode_faces_generic fans them
       for (; polygon_fanned_ + 2 < polygon_.size() && produced < room; ++polygon_fanned_, ++produced) {
         const std::size_t k = polygon_fanned_ + 1;
         const std::size_t corners[3] = {0, k, k + 1};
-        for (int c = 0; c < 3; ++c) {
-          triangles_[produced * 3 + static_cast<std::size_t>(c)] = polygon_[corners[c]];
-          corner_uvs_[produced * 6 + 2 * static_cast<std::size_t>(c)] = polygon_uvs_[2 * corners[c]];
-          corner_uvs_[produced * 6 + 2 * static_cast<std::size_t>(c) + 1] = polygon_uvs_[2 * corners[c] + 1];
+        for (std::size_t c = 0; c < 3; ++c) {
+          triangles_[produced * 3 + c] = polygon_[corners[c]];
+          float* values = corner_values_.data() + (produced * 3 + c) * floats;
+          if (info_.corners.color) values = std::copy(polygon_color_.begin(), polygon_color_.end(), values);
+          if (info_.corners.uv) {
+            values[0] = polygon_uvs_[2 * corners[c]];
+            values[1] = polygon_uvs_[2 * corners[c] + 1];
+          }
         }
       }
       if (polygon_fanned_ + 2 < polygon_.size()) return {};  // the batch is full
@@ -624,23 +660,32 @@ class StreamReader final : public PlyReader {
         ++index_;
       }
       if (index_ == element.count || produced == room) return {};
-      OCTOLOD_RETURN_IF_ERROR(read_polygon_with_uvs(element));
+      OCTOLOD_RETURN_IF_ERROR(read_polygon_with_corners(element));
       polygon_fanned_ = 0;
     }
   }
 
-  // One face entry into polygon_ (vertex indices, checked) and polygon_uvs_ (u, v per corner).
-  Status read_polygon_with_uvs(const ElementPlan& element) {
+  // One face entry into polygon_ (vertex indices, checked), polygon_uvs_ (u, v per corner) and
+  // polygon_color_.
+  Status read_polygon_with_corners(const ElementPlan& element) {
     OCTOLOD_RETURN_IF_ERROR(source_.begin_entry(context(element)));
     polygon_.clear();
     polygon_uvs_.clear();
     std::uint64_t uvs_where = source_.position();
     for (const PropertyPlan& p : element.properties) {
+      const std::uint64_t where = source_.position();
+      if (!p.property.is_list && p.slot != kNoSlot) {  // a colour channel
+        double value = 0;
+        OCTOLOD_RETURN_IF_ERROR(source_.read_number(p.property.type, value));
+        auto converted = convert_value(where, "face", p, value);
+        if (!converted.ok()) return converted.status();
+        polygon_color_[p.slot] = converted.value();
+        continue;
+      }
       if (!p.is_index_list && !p.is_uv_list) {
         OCTOLOD_RETURN_IF_ERROR(skip_property(p));
         continue;
       }
-      const std::uint64_t where = source_.position();
       std::int64_t length = 0;
       OCTOLOD_RETURN_IF_ERROR(source_.read_integer(p.property.count_type, length));
       if (p.is_index_list) {
@@ -672,7 +717,7 @@ class StreamReader final : public PlyReader {
       }
     }
     OCTOLOD_RETURN_IF_ERROR(source_.end_entry());
-    if (polygon_uvs_.size() != 2 * polygon_.size())
+    if (info_.corners.uv && polygon_uvs_.size() != 2 * polygon_.size())
       return error_at(uvs_where, "face " + std::to_string(index_) + " has " +
                                      std::to_string(polygon_uvs_.size()) + " texture coordinates for " +
                                      std::to_string(polygon_.size()) +
@@ -706,9 +751,10 @@ class StreamReader final : public PlyReader {
   std::size_t batch_bytes_;
   std::vector<float> vertices_;
   std::vector<std::uint32_t> triangles_;
-  std::vector<float> corner_uvs_;          // info_.corner_uvs: u, v per corner of triangles_
-  std::vector<std::uint32_t> polygon_;     // decode_faces_with_uvs: the face read last
+  std::vector<float> corner_values_;       // info_.corners: the values of each corner of triangles_
+  std::vector<std::uint32_t> polygon_;     // decode_faces_with_corners: the face read last
   std::vector<float> polygon_uvs_;         // its texcoord list
+  std::array<float, 3> polygon_color_{};   // its colour
   std::size_t polygon_fanned_ = 0;         // its fan's triangles already in a batch
   std::size_t element_ = 0;   // current element
   std::uint64_t index_ = 0;   // next entry of the current element
@@ -720,32 +766,36 @@ class StreamReader final : public PlyReader {
   Status failure_;
 };
 
-// read_ply's wedges: one vertex per distinct (file vertex, u, v) of the corners, in first-use
-// order, carrying that u, v.
-void weld_corner_uvs(PlyMesh& mesh, std::span<const float> corner_uvs) {
+// read_ply's wedges: one vertex per distinct (file vertex, corner values) of the corners, in
+// first-use order, carrying those values.
+void weld_corners(PlyMesh& mesh, std::span<const float> corner_values) {
   const VertexLayout layout = mesh.info.layout;
   const std::size_t floats = layout.floats();
+  const std::size_t corner_floats = mesh.info.corners.floats();
+  const std::size_t first = mesh.info.corners.first_offset(layout);
   struct Wedge {
-    std::uint32_t vertex;
-    std::uint32_t u, v;  // bit patterns
+    std::uint32_t vertex = 0;
+    std::array<std::uint32_t, 5> values{};  // bit patterns, unused ones zero
     bool operator==(const Wedge&) const = default;
   };
   struct WedgeHash {
     std::size_t operator()(const Wedge& w) const {
-      return std::hash<std::uint64_t>{}((std::uint64_t{w.vertex} << 32) ^ (std::uint64_t{w.u} * 0x9E3779B1u) ^ w.v);
+      std::uint64_t h = w.vertex;
+      for (std::uint32_t value : w.values) h = (h ^ value) * 0x100000001B3u;
+      return std::hash<std::uint64_t>{}(h);
     }
   };
   std::unordered_map<Wedge, std::uint32_t, WedgeHash> wedges;
   std::vector<float> vertices;
   for (std::size_t corner = 0; corner < mesh.triangles.size(); ++corner) {
-    const float u = corner_uvs[2 * corner], v = corner_uvs[2 * corner + 1];
-    const Wedge key{mesh.triangles[corner], std::bit_cast<std::uint32_t>(u), std::bit_cast<std::uint32_t>(v)};
+    const float* values = corner_values.data() + corner * corner_floats;
+    Wedge key{.vertex = mesh.triangles[corner]};
+    for (std::size_t i = 0; i < corner_floats; ++i) key.values[i] = std::bit_cast<std::uint32_t>(values[i]);
     const auto [it, added] = wedges.try_emplace(key, static_cast<std::uint32_t>(wedges.size()));
     if (added) {
       const float* source = mesh.vertices.data() + std::size_t{key.vertex} * floats;
       vertices.insert(vertices.end(), source, source + floats);
-      vertices[vertices.size() - floats + layout.uv_offset()] = u;
-      vertices[vertices.size() - floats + layout.uv_offset() + 1] = v;
+      std::copy(values, values + corner_floats, vertices.end() - static_cast<std::ptrdiff_t>(floats - first));
     }
     mesh.triangles[corner] = it->second;
   }
@@ -792,7 +842,7 @@ Result<PlyMesh> read_ply(const std::filesystem::path& path, const PlyReadOptions
   // The counts were checked against the file size by open(), so reserving them is safe.
   mesh.vertices.reserve(reader.info().vertex_count * reader.info().layout.floats());
   mesh.triangles.reserve(reader.info().face_count * 3);
-  std::vector<float> corner_uvs;
+  std::vector<float> corner_values;
   for (;;) {
     Result<PlyBatch> batch = reader.next();
     if (!batch.ok()) return batch.status();
@@ -801,11 +851,11 @@ Result<PlyMesh> read_ply(const std::filesystem::path& path, const PlyReadOptions
       mesh.vertices.insert(mesh.vertices.end(), batch->vertices.begin(), batch->vertices.end());
     } else {
       mesh.triangles.insert(mesh.triangles.end(), batch->triangles.begin(), batch->triangles.end());
-      corner_uvs.insert(corner_uvs.end(), batch->corner_uvs.begin(), batch->corner_uvs.end());
+      corner_values.insert(corner_values.end(), batch->corner_values.begin(), batch->corner_values.end());
     }
   }
   mesh.info = reader.info();  // with the origin the first vertex set
-  if (mesh.info.corner_uvs) weld_corner_uvs(mesh, corner_uvs);
+  if (mesh.info.corners.any()) weld_corners(mesh, corner_values);
   return mesh;
 }
 

@@ -37,10 +37,11 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     if (batch->vertices.size() % floats != 0) __builtin_trap();
     for (std::uint32_t index : batch->triangles)
       if (index >= info.vertex_count) __builtin_trap();
-    // Corner UVs: two per corner when the faces have them, none otherwise; finite and in range.
-    if (batch->corner_uvs.size() != (info.corner_uvs ? 2 * batch->triangles.size() : 0)) __builtin_trap();
-    for (float uv : batch->corner_uvs)
-      if (!(std::abs(uv) <= octolod::kMaxVertexValue)) __builtin_trap();
+    // Corner values: corners.floats() per corner (none without attributes on the faces); finite
+    // and in range.
+    if (batch->corner_values.size() != info.corners.floats() * batch->triangles.size()) __builtin_trap();
+    for (float value : batch->corner_values)
+      if (!(std::abs(value) <= octolod::kMaxVertexValue)) __builtin_trap();
   }
   return 0;
 }

@@ -20,10 +20,11 @@
 // SoupOrder::by_triangle gives the same bytes on every path, whatever the budget and thread
 // count; SoupOrder::any the same records in an order that depends on the path and the budget
 // (never on the thread count).
-// Texture coordinates per face corner (PlyInfo::corner_uvs) go from the split to a file of their
-// own in triangle order; the records are then produced in triangle order (SoupOrder::by_triangle,
-// whatever was asked) and each corner's (u, v) written into its record on the way out, so the
-// soup is that of the same mesh with a vertex per wedge.
+// Attributes the faces give their corners (PlyInfo::corners: texture coordinates per corner,
+// colours per face) go from the split to a file of their own in triangle order; the records are
+// then produced in triangle order (SoupOrder::by_triangle, whatever was asked) and each corner's
+// values written into its record on the way out, so the soup is that of the same mesh with a
+// vertex per wedge.
 //
 // The soup file (a temporary: raw native little-endian records, no header) holds
 // triangle_count records of soup_record_bytes(layout) bytes:
@@ -171,11 +172,12 @@ struct SoupOptions {
   // there are none), once every vertex has been read (out of core possibly while the faces are
   // still being read). An error it returns ends build_soup with that error.
   std::function<Status(const SoupSinkStart& start)> sink_start;
-  // Optional: when the vertices fit (the in-core path), their UVs (if any) are per vertex, and
-  // mesh_sink.accepts the PLY's declared vertex and face counts, the split keeps the triangles in memory and mesh_sink.consume gets
-  // the mesh; no soup record is produced (SoupResult::soup empty, `sink` never called,
-  // SoupResult::mesh_consumed set). If the faces fan out into more triangles than declared, the
-  // PLY is read again for the records path.
+  // Optional: when the vertices fit (the in-core path), the faces give their corners no
+  // attributes (PlyInfo::corners), and mesh_sink.accepts the PLY's declared vertex and face
+  // counts, the split keeps the triangles in memory and mesh_sink.consume gets the mesh; no soup
+  // record is produced (SoupResult::soup empty, `sink` never called, SoupResult::mesh_consumed
+  // set). If the faces fan out into more triangles than declared, the PLY is read again for the
+  // records path.
   SoupMeshSink mesh_sink;
 };
 

@@ -8,9 +8,11 @@
 // int8/uint8/int16/uint16/int32/uint32/float32/float64; list properties of any count/item type.
 // Kept vertex properties: x,y,z; nx,ny,nz; red,green,blue | diffuse_red,diffuse_green,diffuse_blue
 // (alpha read and dropped) as uchar or float; u,v | s,t | texture_u,texture_v |
-// texture_s,texture_t. Faces: the list property vertex_indices or vertex_index, and texture
+// texture_s,texture_t. Faces: the list property vertex_indices or vertex_index; texture
 // coordinates per corner as the float list texcoord (u, v for every corner, the way MeshLab and
-// photogrammetry tools write textured meshes: PlyInfo::corner_uvs). Everything else is skipped.
+// photogrammetry tools write textured meshes); a colour per face as red,green,blue |
+// diffuse_red,diffuse_green,diffuse_blue (alpha dropped), as CAD exports and segmented scans
+// have it. Both are PlyInfo::corners. Everything else is skipped.
 //
 // Errors (Status bad_input unless noted) name the file and the line (ascii) or byte offset
 // (binary): a path that is not a regular file (io: check_input_file, input_file.h),
@@ -22,14 +24,17 @@
 // Details of the contract:
 // - Declared counts are checked against the file size in open(), before anything is allocated
 //   (binary: exact bytes per entry; ascii: two characters per value; faces: 3 indices).
-// - Corner UVs: a texcoord list must hold two floats per index of its face, finite and within
-//   ±kMaxVertexValue. They replace the vertices' own u,v, if any: the layout has uv, vertex
-//   batches hold zeros (or the vertices' u,v) in its slots, and triangle batches carry each
-//   corner's (u, v) beside its index. Such a face is decoded whole before it is fanned out, so
-//   memory is the batch plus the largest face (at most 2^20 corners).
+// - Attributes the faces give their corners (PlyInfo::corners) replace the vertices' own, if
+//   any: the layout has them, vertex batches hold zeros in their slots (or, for uv, the
+//   vertices' u,v), and triangle batches carry each corner's values beside its index
+//   (PlyBatch::corner_values). A texcoord list must hold two floats per index of its face,
+//   finite and within ±kMaxVertexValue; a face's colour goes to each of its corners. Such a
+//   face is decoded whole before it is fanned out, so memory is the batch plus the largest face
+//   (at most 2^20 corners).
 // - Colours of an integer type are divided by the type's maximum (uchar c -> float(c / 255.0)),
-//   float/double colours are kept as they are; info().color_type is float32 when `red` is a
-//   float type, else uchar. An incomplete group (nx without nz, u without v) is skipped.
+//   float/double colours are kept as they are; info().color_type is float32 when the `red`
+//   that is kept (the faces' if they have colours) is a float type, else uchar. An incomplete
+//   group (nx without nz, u without v) is skipped.
 // - NaN/Inf and magnitudes beyond kMaxVertexValue are rejected in every kept attribute (also
 //   after double -> float conversion; positions after the origin is subtracted), not only in
 //   positions, so downstream quadrics and distances never overflow.
@@ -56,6 +61,21 @@
 
 namespace octolod {
 
+// The attributes a PLY's faces give each of their corners instead of its vertex's.
+struct CornerAttributes {
+  bool color = false;  // the face's red, green, blue: one colour for all its corners
+  bool uv = false;     // texcoord: (u, v) per corner
+  // Floats per corner: r, g, b (color) then u, v (uv), VertexLayout's order. They are the
+  // layout's floats from first_offset() on, contiguous (uv follows color in a layout).
+  constexpr std::uint32_t floats() const { return (color ? 3u : 0u) + (uv ? 2u : 0u); }
+  constexpr bool any() const { return color || uv; }
+  // The float offset within a vertex of `layout` (which has these attributes) of the first.
+  constexpr std::uint32_t first_offset(VertexLayout layout) const {
+    return color ? layout.color_offset() : layout.uv_offset();
+  }
+  friend constexpr bool operator==(const CornerAttributes&, const CornerAttributes&) = default;
+};
+
 struct PlyInfo {
   std::filesystem::path path;
   PlyFormat format = PlyFormat::ascii;
@@ -66,9 +86,9 @@ struct PlyInfo {
   PlyColorType color_type = PlyColorType::uchar;  // on-disk colour type when layout.color
   std::uint64_t header_bytes = 0;  // bytes up to and including the end_header line
   bool double_positions = false;   // x, y or z is declared double (float64)
-  // The faces carry texture coordinates per corner (texcoord): layout.uv is set, but the vertex
-  // batches' uv slots are not the texture coordinates, PlyBatch::corner_uvs are.
-  bool corner_uvs = false;
+  // What the faces give their corners (texcoord, face colours): layout has them, but the vertex
+  // batches' slots for them are not the corners' values, PlyBatch::corner_values are.
+  CornerAttributes corners;
   // The images the texture coordinates index, as the header's "comment TextureFile <name>" lines
   // name them (MeshLab's and photogrammetry tools' convention; the keyword in any case), in
   // order, usually relative to the PLY's directory; empty when the header names none. Several
@@ -106,9 +126,10 @@ struct PlyBatch {
   std::span<const float> vertices;
   // kind == triangles: count * 3 vertex indices, each < info().vertex_count.
   std::span<const std::uint32_t> triangles;
-  // kind == triangles and info().corner_uvs: count * 6 floats, (u, v) of each corner in the
-  // order of `triangles`; empty otherwise. Valid until the next call to next().
-  std::span<const float> corner_uvs;
+  // kind == triangles and info().corners.any(): count * 3 * info().corners.floats() floats, the
+  // values of each corner in the order of `triangles`; empty otherwise. Valid until the next
+  // call to next().
+  std::span<const float> corner_values;
 };
 
 class PlyReader {
@@ -129,14 +150,14 @@ class PlyReader {
 };
 
 // Convenience for tests and small files: the whole mesh in memory, as an indexed mesh of
-// wedges. Without corner UVs the vertices are the file's. With them (info.corner_uvs) every
-// distinct pair of a vertex and a corner's (u, v) becomes one vertex (the file's vertex with that
-// u, v), numbered in the order the triangles first use them; vertices no triangle uses are
-// dropped.
+// wedges. Without attributes on the faces the vertices are the file's. With them
+// (info.corners.any()) every distinct pair of a vertex and a corner's values becomes one vertex
+// (the file's vertex with those values), numbered in the order the triangles first use them;
+// vertices no triangle uses are dropped.
 struct PlyMesh {
   PlyInfo info;
   std::vector<float> vertices;          // layout.floats() per vertex (info.vertex_count of them
-                                        // unless info.corner_uvs)
+                                        // unless info.corners.any())
   std::vector<std::uint32_t> triangles;  // 3 per triangle
 };
 // (buffer_bytes of `options` is ignored: the whole mesh is held anyway.)
