@@ -459,6 +459,43 @@ TEST_F(BakeTest, TinyBudgetOutOfCoreGivesTheSameTreeAsALargeBudget) {
             manifest_to_json(without_run_details(ml)));
 }
 
+// A flat model's Morton keys share their upper y bits (a city 60 units high on a ground
+// thousands wide): the out-of-core sort distributes by the bits that vary instead
+// (VaryingKeyBits) and builds the tree the in-memory octree builds from the full keys.
+TEST_F(BakeTest, FlatModelOutOfCoreSortsByTheBitsThatVaryIntoTheSameTree) {
+  samplegen::SampleSpec spec;
+  spec.shape = samplegen::Shape::city;
+  spec.triangles = 30'000;
+  ASSERT_TRUE(samplegen::write_sample_ply(spec, path("city.ply")).ok());
+  BakeOptions small = options("small");
+  small.input = path("city.ply");
+  small.memory_budget_bytes = 2 << 20;
+  small.force_out_of_core = true;
+  small.max_tris = 60;
+  BakeOptions large = small;
+  large.output = path("large");
+  large.memory_budget_bytes = 256 << 20;
+  large.force_out_of_core = false;
+  auto rs = bake(small);
+  ASSERT_TRUE(rs.ok()) << rs.status().message();
+  auto rl = bake(large);
+  ASSERT_TRUE(rl.ok()) << rl.status().message();
+  EXPECT_TRUE(rl->octree_in_memory);
+  EXPECT_GT(rs->sort_runs, 1u);
+  const double key_bits = rs->header.stats.at("octree_sort_key_bits");
+  EXPECT_GT(key_bits, 0.0);
+  EXPECT_LE(key_bits, 3.0 * small.max_depth - 3);  // at least the top levels of y
+  EXPECT_EQ(rl->header.stats.at("octree_sort_key_bits"), 0.0);
+  auto a = tree_files(path("small"));
+  auto b = tree_files(path("large"));
+  a.erase("manifest.json");
+  b.erase("manifest.json");
+  EXPECT_GT(a.size(), 20u);
+  EXPECT_TRUE(a == b);
+  EXPECT_EQ(manifest_to_json(without_run_details(written_manifest(path("small"), rs.value()))),
+            manifest_to_json(without_run_details(written_manifest(path("large"), rl.value()))));
+}
+
 // A textured scan's PLY has its UVs per face corner (texcoord) and one vertex per position; a
 // segmented scan or a CAD export has a colour per face. The same rock written that way
 // (test::write_face_attribute_ply, its seams welded) bakes out of core into the node files its

@@ -45,6 +45,59 @@ TEST(Morton, QuantizerPutsBoundsCornersInTheFirstAndLastCells) {
   EXPECT_EQ(q.key(outside), morton_encode(0, 7, 0));
 }
 
+// A flat model (a city: 3,500 wide, 60 high, in the upper half of its cube in x) keeps its
+// centroids' keys in the same order and equality with the bits all of them share dropped, and
+// expand gives the keys back; the upper y levels and x's top level are what is dropped. A model
+// filling its cube drops nothing.
+TEST(Morton, VaryingKeyBitsDropOnlyWhatEveryCentroidShares) {
+  constexpr std::uint32_t kDepth = 10;
+  Bounds flat;
+  flat.min = {2500, 0, -1750};
+  flat.max = {4500, 60, 1750};
+  Bounds cube_bounds = flat;
+  cube_bounds.min[0] = 0;  // the cube reaches further in x than the model
+  const RootCube cube = RootCube::around(cube_bounds);
+  const MortonQuantizer quantizer(cube, kDepth);
+  const VaryingKeyBits varying(quantizer, kDepth, flat);
+  EXPECT_FALSE(varying.keeps_every_bit());
+  // y spans 60 / 4500 of the cube: its top 6 levels are constant; x spans 2500..4500 of
+  // 0..4500, so only its first level is (upper half: a constant 1)
+  EXPECT_EQ(varying.bits(), 3 * kDepth - 6 - 1);
+
+  std::uint64_t state = 12345;
+  auto next = [&](float lo, float hi) {
+    state = state * 6364136223846793005u + 1442695040888963407u;
+    return lo + (hi - lo) * static_cast<float>(state >> 40) / static_cast<float>(1u << 24);
+  };
+  std::vector<std::uint64_t> keys;
+  for (int t = 0; t < 20000; ++t) {
+    float corners[3][3];
+    for (auto& corner : corners)  // the bounds' corners and faces included
+      for (std::size_t a = 0; a < 3; ++a)
+        corner[a] = t % 7 == 0 ? (t % 2 ? flat.max[a] : flat.min[a]) : next(flat.min[a], flat.max[a]);
+    keys.push_back(centroid_key(quantizer, corners[0], corners[1], corners[2]));
+  }
+  for (std::size_t i = 0; i + 1 < keys.size(); ++i) {
+    const std::uint64_t a = keys[i], b = keys[i + 1];
+    const std::uint64_t ca = varying.compact(a), cb = varying.compact(b);
+    ASSERT_LT(ca, std::uint64_t{1} << varying.bits());
+    ASSERT_EQ(a < b, ca < cb) << i;
+    ASSERT_EQ(a == b, ca == cb) << i;
+    ASSERT_EQ(varying.expand(ca), a) << i;
+  }
+
+  const VaryingKeyBits full(quantizer, kDepth, cube_bounds);
+  EXPECT_EQ(full.bits(), 3 * kDepth - 6);  // only y is flat
+  Bounds solid;
+  solid.min = {0, 0, 0};
+  solid.max = {1, 1, 1};
+  const MortonQuantizer solid_quantizer(RootCube::around(solid), kDepth);
+  const VaryingKeyBits every(solid_quantizer, kDepth, solid);
+  EXPECT_TRUE(every.keeps_every_bit());
+  EXPECT_EQ(every.compact(keys[5]), keys[5]);
+  EXPECT_EQ(every.expand(keys[5]), keys[5]);
+}
+
 TEST(Morton, ChildCellsNestInTheirParentAndTileIt) {
   Bounds b;
   b.min = {0.1f, -3, 7};

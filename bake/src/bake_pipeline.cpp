@@ -5,6 +5,7 @@
 #include "octolod/bake/bake.h"
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -49,17 +50,18 @@ double seconds_since(Clock::time_point start) {
 
 Status interrupted() { return io_error("bake interrupted by a signal"); }
 
-// Sort key of soup records: the Morton code of the triangle's centroid (morton.h).
-SortKeyFn centroid_morton_key(const MortonQuantizer& quantizer, VertexLayout layout) {
+// Sort key of soup records: the Morton code of the triangle's centroid (morton.h), without the
+// bits equal for every centroid (VaryingKeyBits: the same order, fewer key bits).
+SortKeyFn centroid_morton_key(const MortonQuantizer& quantizer, const VaryingKeyBits& varying, VertexLayout layout) {
   const std::size_t record_bytes = soup_record_bytes(layout);
-  return [quantizer, layout, record_bytes](std::span<const std::byte> records,
-                                           std::span<std::uint64_t> keys) {
+  return [quantizer, varying, layout, record_bytes](std::span<const std::byte> records,
+                                                    std::span<std::uint64_t> keys) {
     for (std::size_t i = 0; i < keys.size(); ++i) {
       const std::byte* record = records.data() + i * record_bytes;
       float corner[3][3];
       for (int c = 0; c < 3; ++c)
         std::memcpy(corner[c], record + soup_corner_offset(layout, c), sizeof corner[c]);
-      keys[i] = centroid_key(quantizer, corner[0], corner[1], corner[2]);
+      keys[i] = varying.compact(centroid_key(quantizer, corner[0], corner[1], corner[2]));
     }
   };
 }
@@ -179,6 +181,23 @@ constexpr std::uint64_t kStreamedSortShare = 16;
 // --memory 16M --max-depth 0: 942K vertices in chunks of 1 cap, 574K in memory).
 constexpr std::uint64_t kStreamedChunkLeaves = 4;
 
+// Sorted records into `builder` with their Morton keys: the sort's keys are compact
+// (VaryingKeyBits), expanded here a fixed chunk at a time.
+Status push_with_full_keys(OctreeBuilder& builder, std::span<const std::byte> records,
+                           std::span<const std::uint64_t> keys, const VaryingKeyBits& varying,
+                           std::size_t record_bytes) {
+  if (varying.keeps_every_bit()) return builder.push(records, keys);
+  constexpr std::size_t kChunk = 4096;
+  std::array<std::uint64_t, kChunk> full;  // 32 KiB of stack
+  for (std::size_t first = 0; first < keys.size(); first += kChunk) {
+    const std::size_t n = std::min(kChunk, keys.size() - first);
+    for (std::size_t i = 0; i < n; ++i) full[i] = varying.expand(keys[first + i]);
+    OCTOLOD_RETURN_IF_ERROR(builder.push(records.subspan(first * record_bytes, n * record_bytes),
+                                         std::span<const std::uint64_t>(full.data(), n)));
+  }
+  return {};
+}
+
 // The soup's way into the octree sort (SoupOptions::sink). When the soup stage leaves room
 // for a sorter beside it (its out-of-core path keeps about half the budget free), the records
 // go straight into that sorter's stage and the soup is never written as a file. Otherwise (the in-core path holds the whole budget) they go to a soup file, read into a
@@ -193,7 +212,9 @@ class OctreeInput {
   Status start(const SoupSinkStart& soup) {
     layout_ = soup.layout;
     cube_ = RootCube::around(soup.bounds);
-    key_ = centroid_morton_key(MortonQuantizer(cube_, options_.max_depth), layout_);
+    const MortonQuantizer quantizer(cube_, options_.max_depth);
+    varying_.emplace(quantizer, options_.max_depth, soup.bounds);
+    key_ = centroid_morton_key(quantizer, *varying_, layout_);
     auto budget = divide_octree_budget(options_, layout_, workers(), input_triangles_);
     if (!budget.ok()) return budget.status();
     budget_ = budget.value();
@@ -234,6 +255,8 @@ class OctreeInput {
   }
 
   const RootCube& cube() const { return cube_; }
+  // The Morton key bits of the sort's keys (after start()).
+  const VaryingKeyBits& key_bits() const { return *varying_; }
   // The longest edge of the triangles pushed so far (all of them once the soup stage is done).
   double longest_edge() const { return longest_edge_; }
   const OctreeBudget& budget() const { return budget_; }
@@ -249,8 +272,7 @@ class OctreeInput {
     sort_options.threads = threads_;
     // Morton keys have 3 bits per level: a bucket (MSD radix) sort, no merge. Once the soup
     // stage is done it may take the octree stage's whole sort budget.
-    return create_bucket_sorter(soup_record_bytes(layout_), key_, 3 * options_.max_depth,
-                                sort_options, budget_.sort_bytes);
+    return create_bucket_sorter(soup_record_bytes(layout_), key_, varying_->bits(), sort_options, budget_.sort_bytes);
   }
 
   Status read_back(const std::function<void(std::uint64_t)>& progress) {
@@ -282,6 +304,7 @@ class OctreeInput {
   std::uint64_t input_triangles_;
   VertexLayout layout_;
   RootCube cube_;
+  std::optional<VaryingKeyBits> varying_;  // which bits of the Morton keys key_ keeps
   SortKeyFn key_;
   OctreeBudget budget_;
   std::unique_ptr<RecordSorter> sorter_;
@@ -341,6 +364,7 @@ struct OctreeResult {
   std::optional<NodeLodsLog> lods;  // every node's record
   LodTreeStats lod_stats;
   SortStats sort;
+  unsigned sort_key_bits = 0; // the Morton key bits the sort used (VaryingKeyBits); 0 without one
   bool soup_streamed = false; // the soup went straight into the sorter, no soup file
   double sort_seconds = 0;    // the sort's input left after the soup stage (reading the soup
                               // file back when one was written, the last distribution)
@@ -415,7 +439,7 @@ Result<OctreeResult> build_octree(const BakeOptions& options, const SoupResult& 
       break;
     }
     if (block->empty()) break;
-    streamed = builder.push(block.value(), sorter.keys());
+    streamed = push_with_full_keys(builder, block.value(), sorter.keys(), input.key_bits(), record_bytes);
     if (!streamed.ok()) break;
     done += block->size() / record_bytes;
     progress("octree", done);
@@ -423,6 +447,7 @@ Result<OctreeResult> build_octree(const BakeOptions& options, const SoupResult& 
   if (streamed.ok()) streamed = builder.finish();
   OCTOLOD_RETURN_IF_ERROR(streamed);
   result.sort = sorter.stats();
+  result.sort_key_bits = input.key_bits().bits();
   result.stream_seconds = seconds_since(start);
   OCTOLOD_RETURN_IF_ERROR(finish_lod_tree(options, lod_tree, builder, result));
   return result;
@@ -800,6 +825,7 @@ Result<BakeReport> run_bake(const BakeOptions& given) {
     manifest.stats["soup_far_triangles"] = static_cast<double>(soup->far_triangles);
     manifest.stats["octree_sort_runs"] = static_cast<double>(octree->sort.runs);
     manifest.stats["octree_sort_merge_passes"] = octree->sort.merge_passes;
+    manifest.stats["octree_sort_key_bits"] = octree->sort_key_bits;
     manifest.stats["soup_streamed_to_sort"] = octree->soup_streamed ? 1 : 0;
     report.nodes = octree->nodes.size();
     report.leaves = octree->lod_stats.leaves;

@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <cmath>
 #include <cstdint>
 
@@ -92,6 +93,12 @@ class MortonQuantizer {
     return encode((p[0] - origin_[0]) * scale_, (p[1] - origin_[1]) * scale_,
                   (p[2] - origin_[2]) * scale_);
   }
+  // The cell coordinates key() gives p, one per axis.
+  std::array<std::uint32_t, 3> cells(const double p[3]) const {
+    return {cell((p[0] - origin_[0]) * scale_), cell((p[1] - origin_[1]) * scale_),
+            cell((p[2] - origin_[2]) * scale_)};
+  }
+  std::uint32_t last_cell() const { return last_; }
   // Key of the mean of three points given their sum `s` (the division folded into the scale).
   std::uint64_t key_of_mean3(const double s[3]) const {
     return encode((s[0] - origin3_[0]) * third_scale_, (s[1] - origin3_[1]) * third_scale_,
@@ -113,6 +120,72 @@ class MortonQuantizer {
   double scale_;
   double third_scale_;
   std::uint32_t last_;
+};
+
+// The key bits that vary among points of a box, and keys without the others: the octree's
+// bucket sort distributes by a key's top bits, and a flat model (a city 60 units high and 3,500
+// wide) has the same upper y bits everywhere, so each of them would halve the buckets used and
+// make every bucket too large for memory, to be distributed again. Only the upper levels of an
+// axis can be constant (a prefix of its cell coordinate), so a compact key is those levels'
+// varying bits followed by the lower levels' bits as they are. Keys of points of the box keep
+// their order and their equality: every bit dropped is the same in all of them.
+class VaryingKeyBits {
+ public:
+  // For `quantizer`'s keys of `depth` levels of points inside `bounds` (model units), including
+  // centroids of triangles with corners inside it: the box's cells are widened by one cell on
+  // each side for the rounding of a centroid's computation.
+  VaryingKeyBits(const MortonQuantizer& quantizer, std::uint32_t depth, const Bounds& bounds)
+      : key_bits_(3 * depth) {
+    const double lo[3] = {bounds.min[0], bounds.min[1], bounds.min[2]};
+    const double hi[3] = {bounds.max[0], bounds.max[1], bounds.max[2]};
+    const auto low_cells = quantizer.cells(lo), high_cells = quantizer.cells(hi);
+    std::uint32_t constant_levels[3];
+    std::uint32_t top_levels = 0;  // levels with a constant bit
+    for (std::size_t a = 0; a < 3; ++a) {
+      const std::uint32_t first = low_cells[a] == 0 ? 0 : low_cells[a] - 1;
+      const std::uint32_t last = std::min(high_cells[a] + 1, quantizer.last_cell());
+      constant_levels[a] = bounds.empty() ? 0 : depth - static_cast<std::uint32_t>(std::bit_width(first ^ last));
+      top_levels = std::max(top_levels, constant_levels[a]);
+    }
+    low_bits_ = 3 * (depth - top_levels);
+    std::uint64_t varying = (std::uint64_t{1} << low_bits_) - 1;
+    for (std::uint32_t level = 0; level < top_levels; ++level) {
+      for (std::uint32_t a = 3; a-- > 0;) {
+        if (level < constant_levels[a]) continue;
+        const auto position = static_cast<std::uint8_t>(3 * (depth - 1 - level) + a);
+        top_positions_[top_count_++] = position;
+        varying |= std::uint64_t{1} << position;
+      }
+    }
+    const std::uint64_t all = (std::uint64_t{1} << (3 * depth)) - 1;  // depth <= 21
+    constant_ = morton_encode(low_cells[0], low_cells[1], low_cells[2]) & all & ~varying;
+  }
+
+  // Bits of a compact key.
+  unsigned bits() const { return low_bits_ + top_count_; }
+  // No bit is constant: compact and expand are the identity.
+  bool keeps_every_bit() const { return bits() == key_bits_; }
+  std::uint64_t compact(std::uint64_t key) const {
+    std::uint64_t top = 0;
+    for (std::uint32_t i = 0; i < top_count_; ++i) top = (top << 1) | ((key >> top_positions_[i]) & 1u);
+    return (top << low_bits_) | (key & low_mask());
+  }
+  // The key `compact` made `compacted` of.
+  std::uint64_t expand(std::uint64_t compacted) const {
+    std::uint64_t key = constant_ | (compacted & low_mask());
+    for (std::uint32_t i = 0; i < top_count_; ++i)
+      key |= ((compacted >> (low_bits_ + top_count_ - 1 - i)) & 1u) << top_positions_[i];
+    return key;
+  }
+
+ private:
+  std::uint64_t low_mask() const { return (std::uint64_t{1} << low_bits_) - 1; }  // low_bits_ <= 63
+
+  unsigned key_bits_;                           // of a key: 3 * depth
+  unsigned low_bits_ = 0;                       // the lower levels' bits, all kept
+  std::array<std::uint8_t, 3 * kMaxOctreeDepth> top_positions_{};  // the upper levels' varying
+  std::uint32_t top_count_ = 0;                 // bits, most significant first
+  std::uint64_t constant_ = 0;                  // the bits dropped, as every key has them
 };
 
 // Sort key of a triangle: the key of its centroid, the mean of its corners' positions (model
