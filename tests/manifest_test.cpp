@@ -2,6 +2,12 @@
 #include <sys/stat.h>
 
 #include <array>
+#include <bit>
+#include <cstdint>
+#include <cstdio>
+#include <cmath>
+#include <cstdlib>
+#include <limits>
 #include <fstream>
 #include <string>
 #include <sstream>
@@ -44,6 +50,20 @@ Manifest small_manifest() {
   return m;
 }
 
+// The text a manifest is written as: the whole document's dump(1) (keys sorted, one space per
+// level) but for the nodes, each one line of its own (dump()).
+std::string expected_text(const std::string& text) {
+  nlohmann::json document = nlohmann::json::parse(text);
+  const nlohmann::json nodes = document["nodes"];
+  for (std::size_t i = 0; i < nodes.size(); ++i) document["nodes"][i] = "@" + std::to_string(i) + "@";
+  std::string expected = document.dump(1) + "\n";
+  for (std::size_t i = 0; i < nodes.size(); ++i) {
+    const std::string placeholder = "\"@" + std::to_string(i) + "@\"";
+    expected.replace(expected.find(placeholder), placeholder.size(), nodes[i].dump());
+  }
+  return expected;
+}
+
 TEST(Manifest, JsonRoundTripKeepsEveryField) {
   Manifest m = small_manifest();
   Result<Manifest> back = manifest_from_json(manifest_to_json(m), "m.json");
@@ -52,6 +72,38 @@ TEST(Manifest, JsonRoundTripKeepsEveryField) {
   EXPECT_EQ(back->nodes[0].child_mask(), 0b100001);
   EXPECT_EQ(back->layout, m.layout);
   EXPECT_DOUBLE_EQ(back->nodes[0].lods[0].error, 0.25);
+}
+
+// Bounds are floats: written as the shortest decimals that read back as them (9 significant
+// digits at most, not a double's 17), and read back bit for bit, whatever the float.
+TEST(Manifest, BoundsAreWrittenShortAndReadBackExactly) {
+  const float values[] = {0.1f, -0.0f, 1e-30f, 1e-45f, 3.4028235e38f, -2.5f, 16777216.0f, 16777218.0f,
+                          1.0f / 3.0f, 0.057427104f, -0.69063336f, 4905.123f, 7e-12f, 1.17549435e-38f};
+  Manifest m = small_manifest();
+  for (std::size_t i = 0; i + 2 < std::size(values); ++i) {
+    m.nodes[1].cell.min = {values[i], values[i + 1], values[i + 2]};
+    m.nodes[1].bounds.max = {values[i + 2], values[i], values[i + 1]};
+    const std::string text = manifest_to_json(m);
+    Result<Manifest> back = manifest_from_json(text, "m.json");
+    ASSERT_TRUE(back.ok()) << back.status().message();
+    for (std::size_t a = 0; a < 3; ++a) {
+      EXPECT_EQ(std::bit_cast<std::uint32_t>(back->nodes[1].cell.min[a]),
+                std::bit_cast<std::uint32_t>(m.nodes[1].cell.min[a])) << i << " " << a;
+      EXPECT_EQ(std::bit_cast<std::uint32_t>(back->nodes[1].bounds.max[a]),
+                std::bit_cast<std::uint32_t>(m.nodes[1].bounds.max[a])) << i << " " << a;
+    }
+    const nlohmann::json node = nlohmann::json::parse(text)["nodes"][1];
+    for (const double written : node["cell"]["min"].get<std::vector<double>>()) {
+      // FLT_MAX's shortest decimal, 3.4028235e38, is above FLT_MAX as a double: written whole
+      if (std::abs(written) == static_cast<double>(std::numeric_limits<float>::max())) continue;
+      char shortest[32];
+      std::snprintf(shortest, sizeof shortest, "%.9g", written);
+      EXPECT_EQ(std::strtod(shortest, nullptr), written) << "more than 9 digits: " << written;
+    }
+  }
+  m.nodes[1].cell.min = {0.1f, -0.69063336f, 4905.123f};
+  EXPECT_NE(manifest_to_json(m).find("\"min\":[0.1,-0.69063336,4905.123]"), std::string::npos)
+      << manifest_to_json(m);
 }
 
 TEST(Manifest, OriginKeepsEveryDigitAndDefaultsToZeroWhenAbsent) {
@@ -96,7 +148,7 @@ TEST(Manifest, TextureRoundTripsIsAbsentWhenEmptyAndStaysInsideTheTree) {
   EXPECT_EQ(manifest_to_json(m).find("texture"), std::string::npos);
   m.texture = "texture/stone scan.jpg";
   const std::string text = manifest_to_json(m);
-  EXPECT_EQ(text, nlohmann::json::parse(text).dump(1) + "\n");
+  EXPECT_EQ(text, expected_text(text));
   Result<Manifest> back = manifest_from_json(text, "m.json");
   ASSERT_TRUE(back.ok()) << back.status().message();
   EXPECT_EQ(back->texture, m.texture);
@@ -109,14 +161,14 @@ TEST(Manifest, TextureRoundTripsIsAbsentWhenEmptyAndStaysInsideTheTree) {
   }
 }
 
-// The manifest is written node by node, never as one document: its text must still be exactly
-// the whole document's dump(1) (keys sorted, one space per level), with and without nodes.
+// The manifest is written node by node, never as one document: its text must still be the
+// document's (expected_text), with and without nodes, and one line per node.
 TEST(Manifest, StreamedTextIsTheWholeDocumentsDump) {
   Manifest m = small_manifest();
   for (int with_nodes = 1; with_nodes >= 0; --with_nodes) {
     if (!with_nodes) m.nodes.clear();
     const std::string text = manifest_to_json(m);
-    EXPECT_EQ(text, nlohmann::json::parse(text).dump(1) + "\n") << text;
+    EXPECT_EQ(text, expected_text(text)) << text;
   }
   auto path = std::filesystem::path(::testing::TempDir()) / "manifest_stream_test.json";
   ASSERT_TRUE(write_manifest(path, small_manifest()).ok());
@@ -179,7 +231,7 @@ TEST(Manifest, RejectsMissingKeysWrongTypesAndGarbage) {
 TEST(Manifest, RejectsABadNodeByIndexAndNonObjectNodes) {
   const std::string text = manifest_to_json(small_manifest());
   std::string missing = text;
-  missing.replace(missing.find("\"source_triangles\": 0"), 22, "\"source_triangle\": 0");
+  missing.replace(missing.find("\"source_triangles\":0"), 20, "\"source_triangle\": 0");
   Result<Manifest> r = manifest_from_json(missing, "d");
   ASSERT_FALSE(r.ok());
   EXPECT_EQ(r.status().code(), ErrorCode::bad_input);
@@ -201,9 +253,9 @@ TEST(Manifest, SkipsMembersTheFormatDoesNotDefine) {
     ASSERT_NE(at, std::string::npos) << what;
     text.insert(at + what.size(), extra);
   };
-  insert_after("\"source_triangles\": 0", ", \"extra\": {\"a\": [1, {\"b\": [2]}], \"lods\": 3}");
-  insert_after("\"file\": \"0/lod0.olod\"", ", \"more\": [[1], {\"file\": 2}], \"note\": null");
-  insert_after("\"cell\": {", "\"center\": [0, [1], {\"min\": 2}], ");
+  insert_after("\"source_triangles\":0", ", \"extra\": {\"a\": [1, {\"b\": [2]}], \"lods\": 3}");
+  insert_after("\"file\":\"0/lod0.olod\"", ", \"more\": [[1], {\"file\": 2}], \"note\": null");
+  insert_after("\"cell\":{", "\"center\": [0, [1], {\"min\": 2}], ");
   Result<Manifest> back = manifest_from_json(text, "extra.json");
   ASSERT_TRUE(back.ok()) << back.status().message();
   EXPECT_EQ(manifest_to_json(back.value()), manifest_to_json(m));
@@ -215,25 +267,25 @@ TEST(Manifest, NamesTheNodeAndMemberThatCannotBeRead) {
   const std::string text = manifest_to_json(small_manifest());
   const std::size_t nodes = text.find("\"nodes\"");
   const std::size_t node1_bounds = text.find("\"bounds\"", text.find("\"bounds\"", nodes) + 1);
-  const std::size_t node1_children = text.find("\"children\": [", text.find("\"child_mask\": 0"));
+  const std::size_t node1_children = text.find("\"children\":[", text.find("\"child_mask\":0"));
   struct Case {
     std::size_t at;
     std::string from, to, message;
   };
   const std::vector<Case> cases{
-      {0, "\"path\": \"0\"", "\"path\": 0", "node 1: \"path\" is not a string"},
-      {0, "\"depth\": 1", "\"depth\": -1", "node 1: \"depth\" is not an integer in range"},
-      {0, "\"file\": \"0/lod0.olod\"", "\"file\": 5", "node 1: \"file\" is not a string"},
-      {0, "\"file\": \"0/lod0.olod\"", "\"fil\": \"0/lod0.olod\"", "node 1: lod 0: no \"file\""},
-      {0, "\"error\": 0.0", "\"error\": \"x\"", "node 1: \"error\" is not a number"},
-      {0, "\"error\": 0.0", "\"error\": [0.0]", "node 1: \"error\" is not a scalar"},
-      {0, "\"source_triangles\": 0", "\"source_triangles\": 0.5", "node 1: \"source_triangles\" is not an integer"},
+      {0, "\"path\":\"0\"", "\"path\": 0", "node 1: \"path\" is not a string"},
+      {0, "\"depth\":1", "\"depth\": -1", "node 1: \"depth\" is not an integer in range"},
+      {0, "\"file\":\"0/lod0.olod\"", "\"file\": 5", "node 1: \"file\" is not a string"},
+      {0, "\"file\":\"0/lod0.olod\"", "\"fil\": \"0/lod0.olod\"", "node 1: lod 0: no \"file\""},
+      {0, "\"error\":0.0", "\"error\": \"x\"", "node 1: \"error\" is not a number"},
+      {0, "\"error\":0.0", "\"error\": [0.0]", "node 1: \"error\" is not a scalar"},
+      {0, "\"source_triangles\":0", "\"source_triangles\": 0.5", "node 1: \"source_triangles\" is not an integer"},
       {node1_children, "[", "[-1, ", "node 1: \"children\" has more than 8 elements"},
-      {node1_bounds, "\"min\": [", "\"min\": [\"x\", ", "node 1: \"bounds.min\" holds a value that is not a number"},
-      {node1_bounds, "\"bounds\": {", "\"bounds\": [{", "node 1: \"bounds\" is not an object"},
-      {node1_bounds, "\"min\": [", "\"min\": [1e39, ", "node 1: \"bounds.min\" holds a number beyond the float range"},
-      {node1_bounds, "\"max\": [", "\"maximum\": [", "node 1: no \"bounds.max\""},
-      {0, "\"source_triangles\": 0", "\"source\": 0", "node 1: no \"source_triangles\""},
+      {node1_bounds, "\"min\":[", "\"min\": [\"x\", ", "node 1: \"bounds.min\" holds a value that is not a number"},
+      {node1_bounds, "\"bounds\":{", "\"bounds\": [{", "node 1: \"bounds\" is not an object"},
+      {node1_bounds, "\"min\":[", "\"min\": [1e39, ", "node 1: \"bounds.min\" holds a number beyond the float range"},
+      {node1_bounds, "\"max\":[", "\"maximum\": [", "node 1: no \"bounds.max\""},
+      {0, "\"source_triangles\":0", "\"source\": 0", "node 1: no \"source_triangles\""},
   };
   for (const Case& c : cases) {
     std::string bad = text;
