@@ -67,6 +67,15 @@ class BakeTest : public ::testing::Test {
   static fs::path large_ply() { return root_ / "rock300k.ply"; }
   fs::path path(const std::string& name) const { return dir_ / name; }
   fs::path work() const { return dir_ / "work"; }
+  // A sample of `shape` with about `triangles` triangles (every attribute) at path(name).
+  fs::path write_sample(samplegen::Shape shape, std::uint64_t triangles, const std::string& name) const {
+    samplegen::SampleSpec spec;
+    spec.shape = shape;
+    spec.triangles = triangles;
+    const Status written = samplegen::write_sample_ply(spec, path(name));
+    EXPECT_TRUE(written.ok()) << written.message();
+    return path(name);
+  }
 
   BakeOptions options(const std::string& out) const {
     BakeOptions o;
@@ -463,12 +472,8 @@ TEST_F(BakeTest, TinyBudgetOutOfCoreGivesTheSameTreeAsALargeBudget) {
 // thousands wide): the out-of-core sort distributes by the bits that vary instead
 // (VaryingKeyBits) and builds the tree the in-memory octree builds from the full keys.
 TEST_F(BakeTest, FlatModelOutOfCoreSortsByTheBitsThatVaryIntoTheSameTree) {
-  samplegen::SampleSpec spec;
-  spec.shape = samplegen::Shape::city;
-  spec.triangles = 30'000;
-  ASSERT_TRUE(samplegen::write_sample_ply(spec, path("city.ply")).ok());
   BakeOptions small = options("small");
-  small.input = path("city.ply");
+  small.input = write_sample(samplegen::Shape::city, 30'000, "city.ply");
   small.memory_budget_bytes = 2 << 20;
   small.force_out_of_core = true;
   small.max_tris = 60;
@@ -804,12 +809,8 @@ TEST_F(BakeTest, NodeThreadsTakeTheirShareOfTheBudget) {
 // would need 1.8 GiB at max_tris 100000). Refused, the message names the input's size and the
 // budget that suffices; the tree is the one a large budget bakes.
 TEST_F(BakeTest, ASmallInputIsBudgetedForItsOwnSize) {
-  samplegen::SampleSpec spec;
-  spec.shape = samplegen::Shape::rock;
-  spec.triangles = 3'000;
-  ASSERT_TRUE(samplegen::write_sample_ply(spec, path("rock3k.ply")).ok());
   BakeOptions o = options("out");
-  o.input = path("rock3k.ply");
+  o.input = write_sample(samplegen::Shape::rock, 3'000, "rock3k.ply");
   o.max_tris = 100'000;
   o.memory_budget_bytes = 8 << 20;
   auto refused = bake(o);
