@@ -25,8 +25,8 @@
 // - Declared counts are checked against the file size in open(), before anything is allocated
 //   (binary: exact bytes per entry; ascii: two characters per value; faces: 3 indices).
 // - Attributes the faces give their corners (PlyInfo::corners) replace the vertices' own, if
-//   any: the layout has them, vertex batches hold zeros in their slots (or, for uv, the
-//   vertices' u,v), and triangle batches carry each corner's values beside its index
+//   any: the layout has them, vertex batches hold zeros in their slots (the vertices' own are
+//   skipped), and triangle batches carry each corner's values beside its index
 //   (PlyBatch::corner_values). A texcoord list must hold two floats per index of its face,
 //   finite and within ±kMaxVertexValue; a face's colour goes to each of its corners. Such a
 //   face is decoded whole before it is fanned out, so memory is the batch plus the largest face
