@@ -289,6 +289,78 @@ TEST_F(RenderCli, TextureFlagDrawsTheTreesTextureInsteadOfTheTints) {
   std::filesystem::remove_all(dir);
 }
 
+// render --colors draws the nodes in their own colours instead of the detail tints: a rock
+// whose PLY gives its first half of faces red and the rest blue (colours per face, no vertex
+// colours) shows only those hues and their blends, the tinted picture others as well. A tree
+// without colours is a usage error, with no picture.
+TEST_F(RenderCli, ColorsFlagDrawsTheInputsColoursInsteadOfTheTints) {
+  const auto dir = scratch_dir("colors");
+  const auto plain = dir / "plain.ply";
+  ASSERT_EQ(octolod("sample --shape rock --triangles 20000 --attributes normal --ascii -o " + plain.string(), dir).exit_code,
+            0);
+  std::ifstream in(plain);
+  std::string text, line;
+  std::size_t faces = 0, face = 0, vertices_left = 0;
+  bool body = false;
+  while (std::getline(in, line)) {
+    if (!body) {
+      if (line.rfind("element vertex ", 0) == 0) vertices_left = std::stoul(line.substr(15));
+      if (line.rfind("element face ", 0) == 0) faces = std::stoul(line.substr(13));
+      body = line == "end_header";
+      text += line + "\n";
+      if (line.rfind("property list", 0) == 0) text += "property uchar red\nproperty uchar green\nproperty uchar blue\n";
+      continue;
+    }
+    if (vertices_left > 0) {
+      --vertices_left;
+      text += line + "\n";
+      continue;
+    }
+    text += line + (face++ < faces / 2 ? " 255 0 0\n" : " 0 0 255\n");
+  }
+  ASSERT_EQ(face, faces);
+  std::ofstream(dir / "coloured.ply") << text;
+  ASSERT_EQ(octolod("bake " + (dir / "coloured.ply").string() + " -o " + (dir / "rock").string(), dir).exit_code, 0);
+
+  const std::string render = "--json render " + (dir / "rock").string() + " --width 320 --height 240 -o ";
+  const CliRun run = octolod(render + (dir / "colours.png").string() + " --colors", dir);
+  ASSERT_EQ(run.exit_code, 0);
+  EXPECT_TRUE(run.json.at("colors").get<bool>());
+  ASSERT_EQ(octolod(render + (dir / "tinted.png").string(), dir).exit_code, 0);
+  // red, blue, and magenta where they blend (255-345 degrees); the tints' hues are between
+  const auto count_unlike = [](const Picture& picture, int& red, int& blue) {
+    int lit = 0, unlike = 0;
+    for (double hue : lit_hues(picture)) {
+      ++lit;
+      if (hue < 15 || hue > 345) ++red;
+      else if (std::abs(hue - 240) < 15) ++blue;
+      else if (hue < 225) ++unlike;
+    }
+    EXPECT_GT(lit, 320 * 240 / 10);
+    return unlike;
+  };
+  int red = 0, blue = 0;
+  const int unlike_own = count_unlike(read_png(dir / "colours.png"), red, blue);
+  EXPECT_GT(red, 1000);
+  EXPECT_GT(blue, 1000);
+  EXPECT_EQ(unlike_own, 0);
+  // the same cut tinted: hues moved towards the tints'
+  const std::vector<double> own = lit_hues(read_png(dir / "colours.png"));
+  const std::vector<double> tinted = lit_hues(read_png(dir / "tinted.png"));
+  ASSERT_EQ(own.size(), tinted.size());
+  int moved = 0;
+  for (std::size_t i = 0; i < own.size(); ++i) moved += std::abs(own[i] - tinted[i]) > 10;
+  EXPECT_GT(moved, 1000);
+
+  ASSERT_EQ(octolod("bake " + plain.string() + " -o " + (dir / "uncoloured").string(), dir).exit_code, 0);
+  const auto refused = dir / "refused.png";
+  EXPECT_EQ(octolod("render " + (dir / "uncoloured").string() + " --colors -o " + refused.string(), dir).exit_code, 1);
+  EXPECT_FALSE(std::filesystem::exists(refused));
+  EXPECT_EQ(octolod("render " + (dir / "rock").string() + " --colors --texture -o " + refused.string(), dir).exit_code,
+            1);
+  std::filesystem::remove_all(dir);
+}
+
 TEST_F(RenderCli, CullingBackFacesOpensNoTriangleSizedHole) {
   // Drawn as a game draws it, back faces culled, a closed rock's cut shows the background only
   // where the nearest surface faces away. The framed cut of this rock (seed 2) had a triangle

@@ -1,7 +1,8 @@
 // octolod render: one picture of a baked tree as the streaming runtime selects it for a camera.
 // The tree is opened with octolod::runtime's StreamingTree on a SynchronousExecutor and updated
 // until every LOD the view wants has loaded, so the picture shows the settled cut (no
-// fallbacks), rendered with real OpenGL offscreen and tinted by detail level.
+// fallbacks), rendered with real OpenGL offscreen and tinted by detail level (or in the tree's
+// texture or its own colours).
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -94,6 +95,8 @@ int run_render(const RenderArgs& args, const CommandContext& context) {
     if (!decoded.ok()) return report(decoded.status());
     texture = std::move(decoded).value();
   }
+  if (args.colors && !tree.manifest().layout.color)
+    return report(usage_error("--colors: " + args.tree + " has no colours (its input's PLY had none, per vertex or per face)"));
 
   Lens lens;
   lens.fovy_radians = static_cast<float>(args.fov_degrees * 3.14159265358979 / 180.0);
@@ -125,8 +128,10 @@ int run_render(const RenderArgs& args, const CommandContext& context) {
 
   // picture
   const FramePainter painter(tree.manifest());
-  Result<Image> image = painter.paint(*frame, camera.value(), args.width, args.height, args.cull_back_faces,
-                                      texture ? &texture.value() : nullptr);
+  const FramePainter::Style style{.cull_back_faces = args.cull_back_faces,
+                                  .texture = texture ? &texture.value() : nullptr,
+                                  .own_colors = args.colors};
+  Result<Image> image = painter.paint(*frame, camera.value(), args.width, args.height, style);
   if (!image.ok()) return report(image.status());
   const Status written = write_png(args.output, image.value());
   if (!written.ok()) return report(written);
@@ -160,6 +165,7 @@ int run_render(const RenderArgs& args, const CommandContext& context) {
                 {"fov_degrees", args.ortho ? nlohmann::json() : nlohmann::json(args.fov_degrees)},
                 {"orthographic", args.ortho},
                 {"texture", args.texture},
+                {"colors", args.colors},
                 {"view_height", args.ortho ? nlohmann::json(lens.ortho_height) : nlohmann::json()},
                 {"target_sse_pixels", args.sse},
                 {"budget_bytes", options.max_resident_bytes},

@@ -186,7 +186,7 @@ int run_walk(const WalkArgs& args, const CommandContext& context) {
     stats.push_back(frame.stats);
     if (!args.frames_png.empty() && i % args.frames_png_every == 0) {
       const auto render_start = std::chrono::steady_clock::now();
-      Result<Image> image = painter.paint(frame, cameras.value()[i], kFrameWidth, kFrameHeight);
+      Result<Image> image = painter.paint(frame, cameras.value()[i], kFrameWidth, kFrameHeight, {});
       if (!image.ok()) return report(image.status());
       char name[32];
       std::snprintf(name, sizeof name, "frame_%06u.png", static_cast<unsigned>(i));

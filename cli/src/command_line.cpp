@@ -294,9 +294,15 @@ void add_render_command(CLI::App& app, CommandContext& context) {
   command->add_option("--budget", args->budget, "Cache budget: 8M, 512K, 1G")->capture_default_str();
   command->add_flag("--cull-back-faces", args->cull_back_faces,
                     "Do not draw triangles facing away from the camera, as a game does (default: both sides, lit)");
-  command->add_flag("--texture", args->texture,
-                    "Draw the tree's texture (the image its input's PLY named; PNG or JPEG) on the nodes instead of "
-                    "tinting them by detail level");
+  CLI::Option* texture = command->add_flag(
+      "--texture", args->texture,
+      "Draw the tree's texture (the image its input's PLY named; PNG or JPEG) on the nodes instead of "
+      "tinting them by detail level");
+  command
+      ->add_flag("--colors", args->colors,
+                 "Draw the nodes in their own colours (the input's, per vertex or per face), lit, instead of tinting "
+                 "them by detail level")
+      ->excludes(texture);
   command->callback([args, &context] { context.exit_code = run_render(*args, context); });
 }
 

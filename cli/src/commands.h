@@ -79,6 +79,7 @@ struct RenderArgs {
   bool ortho = false;  // an orthographic view framing the model sphere instead of --fov's perspective
   bool cull_back_faces = false;  // as a game draws: a triangle facing away from the camera is not drawn
   bool texture = false;  // the tree's texture on the nodes instead of their detail-level tints
+  bool colors = false;   // the nodes' own colours (the input's, per vertex or face) instead of tints
   int width = 1024;
   int height = 768;
   // The runtime's default (walk's too): the framed demo rock (samples/rock_small.ply, 40K

@@ -21,13 +21,15 @@ std::uint32_t FramePainter::detail_level(const runtime::DrawItem& draw) const {
 }
 
 Result<Image> FramePainter::paint(const runtime::FrameResult& frame, const runtime::Camera& camera, int width,
-                                  int height, bool cull_back_faces, const Image* texture) const {
+                                  int height, const Style& style) const {
   std::vector<RenderItem> items;
   items.reserve(frame.draws.size());
   for (const runtime::DrawItem& draw : frame.draws) {
     if (!draw.mesh) continue;
-    if (texture != nullptr && draw.mesh->layout.uv)
-      items.push_back({.mesh = draw.mesh.get(), .tint_share = 0.0f, .texture = texture});
+    if (style.texture != nullptr && draw.mesh->layout.uv)
+      items.push_back({.mesh = draw.mesh.get(), .tint_share = 0.0f, .texture = style.texture});
+    else if (style.own_colors)
+      items.push_back({.mesh = draw.mesh.get(), .tint_share = 0.0f});
     else
       items.push_back({.mesh = draw.mesh.get(), .tint = lod_tint(detail_level(draw))});
   }
@@ -36,7 +38,7 @@ Result<Image> FramePainter::paint(const runtime::FrameResult& frame, const runti
   view.projection = camera.projection;
   view.width = width;
   view.height = height;
-  view.cull_back_faces = cull_back_faces;
+  view.cull_back_faces = style.cull_back_faces;
   return render_offscreen(items, view);
 }
 

@@ -26,12 +26,19 @@ class FramePainter {
   // step coarser. This is the level a picture's tint encodes.
   std::uint32_t detail_level(const runtime::DrawItem& draw) const;
 
-  // Renders `frame.draws` as seen by `camera` into a width x height picture (pixels), back faces
-  // culled when `cull_back_faces` (RenderView). With a `texture` (the tree's, decoded) the nodes
-  // with UVs show it instead of their tints. The camera's projection should have aspect width /
-  // height. Fails (ErrorCode::unsupported) only when no OpenGL context can be created.
+  // How the nodes are drawn: by default tinted by their detail level, half the tint and half
+  // their own colours (white without).
+  struct Style {
+    bool cull_back_faces = false;    // RenderView::cull_back_faces
+    const Image* texture = nullptr;  // the tree's texture (decoded): nodes with UVs show it
+    bool own_colors = false;         // the nodes' own colours alone, no tint
+  };
+
+  // Renders `frame.draws` as seen by `camera` into a width x height picture (pixels). The
+  // camera's projection should have aspect width / height. Fails (ErrorCode::unsupported) only
+  // when no OpenGL context can be created.
   Result<Image> paint(const runtime::FrameResult& frame, const runtime::Camera& camera, int width, int height,
-                      bool cull_back_faces = false, const Image* texture = nullptr) const;
+                      const Style& style) const;
 
  private:
   std::vector<std::uint32_t> height_;  // per manifest node
