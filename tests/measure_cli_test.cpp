@@ -437,6 +437,48 @@ TEST(InfoCli, StatsPrintCountsWholeAndSecondsShort) {
       << run.out;
 }
 
+// info on a PLY file reads its header alone and says what a bake keeps: the attributes and
+// where they come from (a colour per face, UVs per corner replacing the vertices' own), the
+// textures named, and every property and element it skips. A PLY it cannot read fails as bake
+// would, naming the file and line.
+TEST(InfoCli, PlyFileShowsWhatIsKeptFromWhereAndWhatIsSkipped) {
+  SKIP_WITHOUT_CLI();
+  TempDir dir;
+  const fs::path ply = dir / "scan.ply";
+  std::ofstream(ply) << "ply\nformat ascii 1.0\ncomment TextureFile scan.jpg\n"
+                        "element vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+                        "property float u\nproperty float v\nproperty float quality\n"
+                        "element face 1\nproperty list uchar int vertex_indices\nproperty list uchar float texcoord\n"
+                        "property uchar red\nproperty uchar green\nproperty uchar blue\nproperty int texnumber\n"
+                        "element camera 1\nproperty float focal\nend_header\n"
+                        "0 0 0 0 0 1\n1 0 0 1 0 1\n0 1 0 0 1 1\n3 0 1 2 6 0 0 1 0 0 1 255 0 0 0\n35\n";
+  const CliRun as_json = run_cli(dir, "--json info " + ply.string());
+  ASSERT_EQ(as_json.code, 0) << as_json.err;
+  const json info = json::parse(as_json.out);
+  EXPECT_EQ(info.at("layout"), "position,color,uv");
+  EXPECT_EQ(info.at("colors"), "face");
+  EXPECT_EQ(info.at("color_type"), "uchar");
+  EXPECT_EQ(info.at("uvs"), "corner");
+  EXPECT_EQ(info.at("vertices"), 3);
+  EXPECT_EQ(info.at("faces"), 1);
+  EXPECT_EQ(info.at("texture_files"), json::array({"scan.jpg"}));
+  EXPECT_EQ(info.at("skipped"),
+            json::array({"vertex.u", "vertex.v", "vertex.quality", "face.texnumber", "element camera"}));
+  const CliRun text = run_cli(dir, "info " + ply.string());
+  ASSERT_EQ(text.code, 0) << text.err;
+  EXPECT_NE(text.out.find("colours     per face (uchar)"), std::string::npos) << text.out;
+  EXPECT_NE(text.out.find("skipped     vertex.u, vertex.v, vertex.quality, face.texnumber, element camera\n"),
+            std::string::npos)
+      << text.out;
+
+  std::ofstream(dir / "bad.ply") << "ply\nformat ascii 1.0\nelement vertex 1\nend_header\n";
+  const CliRun bad = run_cli(dir, "info " + (dir / "bad.ply").string());
+  EXPECT_EQ(bad.code, 2);
+  EXPECT_NE(bad.err.find((dir / "bad.ply").string() + ": line 3: element 'vertex' has no property 'x'"),
+            std::string::npos)
+      << bad.err;
+}
+
 TEST(ExtractCli, ErrorCutUsesOnlyLodsWithinTheTargetAndWeldsSeams) {
   SKIP_WITHOUT_CLI();
   TempDir dir;

@@ -336,6 +336,8 @@ TEST(PlyReader, FaceColoursGoToTheirCornersAndReadPlyMakesWedges) {
   const PlyMesh mesh = read_ok(path);
   EXPECT_EQ(mesh.info.corners, (CornerAttributes{.color = true}));
   EXPECT_EQ(mesh.info.layout, (VertexLayout{.color = true}));
+  // the vertices' colours the faces' replace are skipped, and so is the faces' alpha
+  EXPECT_EQ(mesh.info.skipped, (std::vector<std::string>{"vertex.red", "vertex.green", "vertex.blue", "face.alpha"}));
   EXPECT_EQ(mesh.info.color_type, PlyColorType::uchar);
   EXPECT_EQ(mesh.triangles, (std::vector<std::uint32_t>{0, 1, 2, 0, 2, 3, 4, 5, 6}));
   EXPECT_EQ(mesh.vertices, (std::vector<float>{0, 0, 0, 1, 0, 0, 1, 0, 0, 1, 0, 0, 1, 1, 0, 1, 0, 0,
@@ -433,6 +435,10 @@ TEST(PlyReader, SkipsUnknownElementsAndPropertiesIncludingLists) {
     EXPECT_EQ(mesh.info.layout, VertexLayout{});
     EXPECT_EQ(mesh.vertices, (std::vector<float>{1, 2, 3, 4, 5, 6, 7, 8, 9}));
     EXPECT_EQ(mesh.triangles, (std::vector<std::uint32_t>{2, 1, 0}));
+    // what was skipped, named for `octolod info`
+    EXPECT_EQ(mesh.info.skipped, (std::vector<std::string>{"element camera", "vertex.flags", "vertex.extra",
+                                                           "vertex.quality", "vertex.nx", "face.material",
+                                                           "face.tags", "element edge"}));
   }
 }
 

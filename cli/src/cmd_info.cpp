@@ -1,7 +1,7 @@
 // octolod info: what a baked tree holds, from its manifest alone (docs/formats.md): nodes,
 // leaves, depth, triangles per leaf, bytes, attribute layout, bake parameters, stage times, and
 // the LODs: per chain index and per depth their counts, triangles and error range, the root's
-// chain.
+// chain. Given a PLY file instead, what octolod reads from it (cmd_info_ply.cpp).
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -135,6 +135,8 @@ void print_levels(const char* title, const char* key, const std::vector<LodLevel
 }  // namespace
 
 int run_info(const std::string& tree, const CommandContext& context) {
+  std::error_code is_file_error;
+  if (std::filesystem::is_regular_file(tree, is_file_error)) return run_ply_info(tree, context);
   const std::filesystem::path path = std::filesystem::path(tree) / kManifestFileName;
   Result<Manifest> manifest = read_manifest(path);
   if (!manifest.ok()) return report(manifest.status());

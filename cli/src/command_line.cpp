@@ -246,9 +246,12 @@ void add_extract_command(CLI::App& app, CommandContext& context) {
 
 void add_info_command(CLI::App& app, CommandContext& context) {
   auto tree = std::make_shared<std::string>();
-  CLI::App* command =
-      app.add_subcommand("info", "Summarize a baked tree: nodes, leaves, LODs (triangles, errors), sizes, parameters, times");
-  command->add_option("tree", *tree, "Baked tree directory (holds manifest.json)")->required();
+  CLI::App* command = app.add_subcommand(
+      "info",
+      "Summarize a baked tree (nodes, leaves, LODs with triangles and errors, sizes, parameters, times), or "
+      "what octolod reads from a PLY file (its header: counts, attributes and where they come from, textures, "
+      "what is skipped)");
+  command->add_option("path", *tree, "Baked tree directory (holds manifest.json), or a PLY file")->required();
   command->callback([tree, &context] { context.exit_code = run_info(*tree, context); });
 }
 

@@ -122,7 +122,9 @@ int run_compare(const CompareArgs& args, const CommandContext& context);
 int run_eval(const EvalArgs& args, const CommandContext& context);
 int run_export(const ExportArgs& args, const CommandContext& context);
 int run_extract(const ExtractArgs& args, const CommandContext& context);
-int run_info(const std::string& tree, const CommandContext& context);
+// `path`: a baked tree's directory, or a PLY file (run_ply_info).
+int run_info(const std::string& path, const CommandContext& context);
+int run_ply_info(const std::string& ply, const CommandContext& context);
 int run_reference(const ReferenceArgs& args, const CommandContext& context);
 int run_render(const RenderArgs& args, const CommandContext& context);
 int run_sample(const SampleArgs& args, const CommandContext& context);

@@ -273,6 +273,15 @@ Result<Plan> build_plan(const ply::Header& header, const ply::FileBuffer& in) {
   for (std::size_t i = 0; i < header.elements.size(); ++i)
     if (plan.elements[i].role == Role::vertices)
       OCTOLOD_RETURN_IF_ERROR(plan_vertices(header.elements[i], path, plan.elements[i], plan.info));
+  for (const ElementPlan& element : plan.elements) {
+    if (element.role == Role::skip) {
+      plan.info.skipped.push_back("element " + element.name);
+      continue;
+    }
+    for (const PropertyPlan& p : element.properties)
+      if (p.slot == kNoSlot && !p.is_index_list && !p.is_uv_list)
+        plan.info.skipped.push_back(element.name + "." + p.property.name);
+  }
   OCTOLOD_RETURN_IF_ERROR(check_counts(header, plan, in.file_size(), path));
   if (vertex->count > std::numeric_limits<std::uint32_t>::max())
     return unsupported_error(ply::message_at_line(

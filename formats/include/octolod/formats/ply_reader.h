@@ -94,6 +94,10 @@ struct PlyInfo {
   // order, usually relative to the PLY's directory; empty when the header names none. Several
   // go with a face property (texnumber) saying which image a face's UVs index.
   std::vector<std::string> texture_files;
+  // What the reader skips, in header order: properties of the vertex and face elements as
+  // "vertex.quality", "face.texnumber" (including the vertices' own colours or UVs that the
+  // faces' replace, and incomplete groups such as a lone nx), other elements as "element camera".
+  std::vector<std::string> skipped;
   // Subtracted from every position before it is rounded to float (PlyReadOptions): the decoded
   // positions are relative to it. Zeros unless an origin applies; with recentre_double_positions
   // it is known once the first vertex batch has been returned.
