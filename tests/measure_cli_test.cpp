@@ -471,6 +471,12 @@ TEST(InfoCli, PlyFileShowsWhatIsKeptFromWhereAndWhatIsSkipped) {
             std::string::npos)
       << text.out;
 
+  const CliRun missing = run_cli(dir, "info " + (dir / "scna.ply").string());
+  EXPECT_EQ(missing.code, 4);
+  EXPECT_NE(missing.err.find("'" + (dir / "scna.ply").string() + "' does not exist (info takes a baked tree's "
+                                                                 "directory or a PLY file)"),
+            std::string::npos)
+      << missing.err;
   std::ofstream(dir / "bad.ply") << "ply\nformat ascii 1.0\nelement vertex 1\nend_header\n";
   const CliRun bad = run_cli(dir, "info " + (dir / "bad.ply").string());
   EXPECT_EQ(bad.code, 2);

@@ -135,8 +135,11 @@ void print_levels(const char* title, const char* key, const std::vector<LodLevel
 }  // namespace
 
 int run_info(const std::string& tree, const CommandContext& context) {
-  std::error_code is_file_error;
-  if (std::filesystem::is_regular_file(tree, is_file_error)) return run_ply_info(tree, context);
+  std::error_code status_error;
+  const std::filesystem::file_status status = std::filesystem::status(tree, status_error);
+  if (std::filesystem::is_regular_file(status)) return run_ply_info(tree, context);
+  if (!std::filesystem::exists(status))
+    return report(io_error("'" + tree + "' does not exist (info takes a baked tree's directory or a PLY file)"));
   const std::filesystem::path path = std::filesystem::path(tree) / kManifestFileName;
   Result<Manifest> manifest = read_manifest(path);
   if (!manifest.ok()) return report(manifest.status());
